@@ -68,7 +68,7 @@ def step_metrics(w: StepWindow) -> dict[str, float]:
     if step == 0.0 or w.t.size == 0:
         return {}
     sign = math.copysign(1.0, step)
-    dev = sign * (w.y - w.y0)          # progress towards the target, positive
+    dev = sign * (w.y - w.y0)  # progress towards the target, positive
     size = abs(step)
     out: dict[str, float] = {}
 

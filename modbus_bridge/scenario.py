@@ -70,8 +70,13 @@ class SensorSpec:
     adc: AdcFrontEnd = field(default_factory=AdcFrontEnd)
 
     def build(self, seed: int) -> Sensor:
-        return Sensor(lag_s=self.lag_s, noise_sigma_c=self.noise_sigma_c, adc=dataclasses.replace(self.adc),
-                      seed=seed, offset_c=self.offset_c)
+        return Sensor(
+            lag_s=self.lag_s,
+            noise_sigma_c=self.noise_sigma_c,
+            adc=dataclasses.replace(self.adc),
+            seed=seed,
+            offset_c=self.offset_c,
+        )
 
 
 @dataclass
@@ -131,8 +136,17 @@ class _Table:
         key = self.key(name) if name else (self.path or "<top level>")
         raise ScenarioError(f"{self.file}: {key}: {why}")
 
-    def get(self, name: str, kind: type, default: Any = ..., *, minimum: float | None = None,
-            above: float | None = None, maximum: float | None = None, choices: tuple | None = None) -> Any:
+    def get(
+        self,
+        name: str,
+        kind: type,
+        default: Any = ...,
+        *,
+        minimum: float | None = None,
+        above: float | None = None,
+        maximum: float | None = None,
+        choices: tuple | None = None,
+    ) -> Any:
         self.used.add(name)
         if name not in self.data:
             if default is ...:
@@ -200,9 +214,11 @@ def _plant_params(tab: _Table) -> tuple[str, dict[str, Any], Plant]:
             tab.fail(key, f"must be > 0, got {value!r}")
         params[key] = float(value)
         tab.used.add(key)
-    missing = [n for n, f in fields.items()
-               if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
-               and n not in params]
+    missing = [
+        n
+        for n, f in fields.items()
+        if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING and n not in params
+    ]
     if missing:
         tab.fail(missing[0], f"missing required field for plant model '{model}'")
     try:
@@ -326,9 +342,21 @@ def load_scenario(path: str | Path) -> Scenario:
     if not variants:
         variants = [Variant(name="as written")]
     top.done()
-    return Scenario(path=file, name=name, description=description, reference=reference, seed=seed,
-                    dt_s=dt_s, scans_per_step=scans, pv_path=pv_path, output_path=output_path,
-                    plant_model=model, plant_params=params, zones=zones, variants=variants)
+    return Scenario(
+        path=file,
+        name=name,
+        description=description,
+        reference=reference,
+        seed=seed,
+        dt_s=dt_s,
+        scans_per_step=scans,
+        pv_path=pv_path,
+        output_path=output_path,
+        plant_model=model,
+        plant_params=params,
+        zones=zones,
+        variants=variants,
+    )
 
 
 def shipped_scenarios() -> list[Path]:

@@ -15,6 +15,16 @@ PLANT_MODELS: dict[str, type[Plant]] = {
 }
 
 __all__ = [
-    "PLANT_MODELS", "CureMould", "DelayLine", "Fopdt", "FormingPlatform", "MarlinHotend", "NonlinearHotend",
-    "Plant", "PlantDisturbance", "Sopdt", "TclabTwin", "ZoneDisturbance",
+    "PLANT_MODELS",
+    "CureMould",
+    "DelayLine",
+    "Fopdt",
+    "FormingPlatform",
+    "MarlinHotend",
+    "NonlinearHotend",
+    "Plant",
+    "PlantDisturbance",
+    "Sopdt",
+    "TclabTwin",
+    "ZoneDisturbance",
 ]

@@ -25,10 +25,10 @@ Derivative = Callable[[State], State]
 class ZoneDisturbance:
     """Disturbances acting on one plant channel; the scenario runner changes them over time."""
 
-    load_pct: float = 0.0          # extra heat loss in % of full heater power, input side (via dead time)
-    heater_failed: bool = False    # open heater: the command has no effect
-    fan: float = 0.0               # part-cooling fan duty 0..1 (plants with a fan term)
-    filament_mm_s: float = 0.0     # filament feed rate (hot ends with a filament term)
+    load_pct: float = 0.0  # extra heat loss in % of full heater power, input side (via dead time)
+    heater_failed: bool = False  # open heater: the command has no effect
+    fan: float = 0.0  # part-cooling fan duty 0..1 (plants with a fan term)
+    filament_mm_s: float = 0.0  # filament feed rate (hot ends with a filament term)
 
 
 @dataclass

@@ -24,7 +24,7 @@ class Fopdt(Plant):
     dead_time_s: float
     ambient_c: float = 25.0
     initial_c: float | None = None
-    time_constant_scale: float = 1.0   # model mismatch: the real plant is slower (1.3, 1.5) than identified
+    time_constant_scale: float = 1.0  # model mismatch: the real plant is slower (1.3, 1.5) than identified
     gain_scale: float = 1.0
     u_min_pct: float = 0.0
     u_max_pct: float = 100.0

@@ -44,10 +44,10 @@ class _DelayedInputs:
 class NonlinearHotend(Plant):
     heater_w: float = 40.0
     heat_capacity_j_k: float = 16.7
-    loss_coeff_w: float = 0.0     # k in k (dT)^E; 0 -> derived from max_rise_c
+    loss_coeff_w: float = 0.0  # k in k (dT)^E; 0 -> derived from max_rise_c
     loss_exponent: float = 1.35
-    max_rise_c: float = 340.0     # steady-state rise at 100 % (control.md T1: K = 340 °C)
-    fan_w_k: float = 0.029        # extra loss at full fan (Marlin MPC: 0.097 - 0.068 W/K)
+    max_rise_c: float = 340.0  # steady-state rise at 100 % (control.md T1: K = 340 °C)
+    fan_w_k: float = 0.029  # extra loss at full fan (Marlin MPC: 0.097 - 0.068 W/K)
     filament_j_k_mm: float = 0.0056
     dead_time_s: float = 5.5
     ambient_c: float = 25.0
@@ -160,12 +160,14 @@ class TclabTwin(Plant):
         def f(x: np.ndarray) -> np.ndarray:
             h1, h2, t1, t2 = x
             cross = (h1 - h2) / self.coupling_time_s
-            return np.array([
-                (heat[0] + (ta - h1) / self.ambient_time_s - cross) / s,
-                (heat[1] + (ta - h2) / self.ambient_time_s + cross) / s,
-                (h1 - t1) / self.sensor_time_s,
-                (h2 - t2) / self.sensor_time_s,
-            ])
+            return np.array(
+                [
+                    (heat[0] + (ta - h1) / self.ambient_time_s - cross) / s,
+                    (heat[1] + (ta - h2) / self.ambient_time_s + cross) / s,
+                    (h1 - t1) / self.sensor_time_s,
+                    (h2 - t2) / self.sensor_time_s,
+                ]
+            )
 
         self._x = rk4_step(f, self._x, dt, self.max_substep_s)
 
@@ -210,10 +212,12 @@ class FormingPlatform(Plant):
         def f(x: np.ndarray) -> np.ndarray:
             bath, plat = x
             q_bp = self.bath_platform_w_k * (bath - plat)
-            return np.array([
-                (power - self.bath_ambient_w_k * (bath - ta) - q_bp) / (self.bath_heat_capacity_j_k * s),
-                (q_bp - self.platform_ambient_w_k * (plat - ta)) / (self.platform_heat_capacity_j_k * s),
-            ])
+            return np.array(
+                [
+                    (power - self.bath_ambient_w_k * (bath - ta) - q_bp) / (self.bath_heat_capacity_j_k * s),
+                    (q_bp - self.platform_ambient_w_k * (plat - ta)) / (self.platform_heat_capacity_j_k * s),
+                ]
+            )
 
         self._x = rk4_step(f, self._x, dt, self.max_substep_s)
 

@@ -1,0 +1,239 @@
+"""The soft-PLC Modbus TCP server (pymodbus) with a real-time or stepped clock.
+
+`SoftPlc` is an async context manager; `SoftPlcThread` runs the same in a background
+thread for synchronous callers. Requests are answered as soon as they are decoded, in
+order (pipelined requests included), without an extra event-loop round per request.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import threading
+from pathlib import Path
+
+from pymodbus.constants import ExcCodes
+from pymodbus.exceptions import ModbusIOException
+from pymodbus.pdu import ExceptionResponse, ModbusPDU
+from pymodbus.server import ModbusTcpServer
+from pymodbus.server.requesthandler import ServerRequestHandler
+from pymodbus.transaction import TransactionManager
+
+from plc.runtime.datastore import PlcDatastore
+from plc.runtime.engine import ApplicationLike, PlcEngine
+from plc.runtime.image import ModbusImage
+
+log = logging.getLogger("thermost.plc")
+
+NS_PER_S = 1e9
+MBAP_SIZE = 7  # transaction id, protocol id, length, unit id
+MBAP_PROTOCOL_SLICE = slice(2, 4)
+
+
+def load_program(program: ApplicationLike | Path | str, filename: str = "<source>") -> ApplicationLike:
+    """An `Application` from an application object, a `.st` path, or ST source text."""
+    if hasattr(program, "scan"):
+        return program  # type: ignore[return-value]
+    from plc.st.compiler import load_application
+
+    if isinstance(program, Path):
+        return load_application([(str(program), program.read_text(encoding="utf-8"))])
+    return load_application([(filename, str(program))])
+
+
+class _PlcRequestHandler(ServerRequestHandler):
+    """Per-connection handler: decodes every frame in the buffer and answers it at once."""
+
+    def callback_data(self, data: bytes, addr: tuple | None = None) -> int:
+        consumed = 0
+        while consumed < len(data):
+            rest = data[consumed:]
+            if len(rest) >= MBAP_SIZE and rest[MBAP_PROTOCOL_SLICE] != b"\0\0":
+                log.warning("dropping %d bytes: not Modbus TCP (protocol id is not 0)", len(rest))
+                return len(data)
+            try:
+                used = TransactionManager.callback_data(self, rest, addr)
+            except ModbusIOException as exc:
+                self._answer_undecodable(exc, rest, addr)
+                return len(data)
+            if self.last_pdu is not None:
+                self._answer(self.last_pdu, addr)
+            if used == 0:
+                break
+            consumed += used
+        return consumed
+
+    def _answer_undecodable(self, exc: ModbusIOException, frame: bytes, addr: tuple | None) -> None:
+        """A frame pymodbus cannot decode: bad quantity/length for a known code, or an unknown code."""
+        function_code = frame[MBAP_SIZE] & 0x7F if len(frame) > MBAP_SIZE else 0
+        known = function_code in self.server.decoder.list_function_codes()
+        code = ExcCodes.ILLEGAL_VALUE if known else ExcCodes.ILLEGAL_FUNCTION
+        response = ExceptionResponse(function_code, exception_code=code, device_id=exc.dev_id or 0,
+                                     transaction=exc.transaction_id or 0)
+        self.server_send(response, addr)
+
+    def _answer(self, pdu: ModbusPDU, addr: tuple | None) -> None:
+        coroutine = pdu.datastore_update(self.server.context, pdu.dev_id)
+        try:
+            coroutine.send(None)
+        except StopIteration as done:
+            response = done.value
+        except Exception:  # noqa: BLE001 - a request must never take the server down
+            log.exception("request function %d failed", pdu.function_code)
+            response = ExceptionResponse(pdu.function_code, ExcCodes.DEVICE_FAILURE)
+        else:  # the datastore never awaits; a PDU handler that does is not supported
+            coroutine.close()
+            log.error("request function %d needs an asynchronous handler; refused", pdu.function_code)
+            response = ExceptionResponse(pdu.function_code, ExcCodes.ILLEGAL_FUNCTION)
+        response.transaction_id = pdu.transaction_id
+        response.dev_id = pdu.dev_id
+        self.server_send(response, addr)
+
+
+class _PlcTcpServer(ModbusTcpServer):
+    def callback_new_connection(self) -> ServerRequestHandler:
+        return _PlcRequestHandler(self, self.trace_packet, self.trace_pdu, self.trace_connect)
+
+
+class RealTimeClock:
+    """Runs one scan every TASK interval of wall time, on absolute deadlines (no drift)."""
+
+    def __init__(self, engine: PlcEngine, loop: asyncio.AbstractEventLoop):
+        self.engine = engine
+        self.loop = loop
+        self._deadline = 0.0
+        self._handle: asyncio.TimerHandle | None = None
+
+    def start(self) -> None:
+        self._deadline = self.loop.time()
+        self._handle = self.loop.call_at(self._deadline, self._tick)
+
+    def stop(self) -> None:
+        if self._handle is not None:
+            self._handle.cancel()
+            self._handle = None
+
+    def _tick(self) -> None:
+        with self.engine.lock:
+            self.engine.scan_once()
+        interval = self.engine.interval_ns / NS_PER_S
+        self._deadline += interval
+        now = self.loop.time()
+        if now - self._deadline > interval:
+            self.engine.overruns += 1
+            self._deadline = now
+        self._handle = self.loop.call_at(self._deadline, self._tick)
+
+
+class SoftPlc:
+    """Soft-PLC: Modbus TCP server with OpenPLC's map over a PLC program.
+
+    `async with SoftPlc(program, port=0, stepped=True) as plc:` then `plc.port`.
+    """
+
+    def __init__(self, program: ApplicationLike | Path | str, host: str = "127.0.0.1", port: int = 0,
+                 stepped: bool = False):
+        app = load_program(program)
+        self.engine = PlcEngine(app, stepped)
+        self.image = ModbusImage(app.located)
+        self.host = host
+        self.requested_port = port
+        self.port: int | None = None
+        self.stepped = stepped
+        self._server: _PlcTcpServer | None = None
+        self._clock: RealTimeClock | None = None
+        self._stopped: asyncio.Event | None = None
+
+    @property
+    def app(self) -> ApplicationLike:
+        return self.engine.app
+
+    async def start(self) -> None:
+        self._stopped = asyncio.Event()
+        datastore = PlcDatastore(self.image, self.engine)
+        server = _PlcTcpServer(datastore, address=(self.host, self.requested_port))
+        try:
+            await server.serve_forever(background=True)
+        except RuntimeError as exc:
+            raise OSError(f"cannot listen on {self.host}:{self.requested_port}") from exc
+        self._server = server
+        self.port = server.transport.sockets[0].getsockname()[1]  # type: ignore[union-attr]
+        if not self.stepped:
+            self._clock = RealTimeClock(self.engine, asyncio.get_running_loop())
+            self._clock.start()
+
+    def stop(self) -> None:
+        """Ask `serve_forever` to return (safe to call from the loop's thread only)."""
+        if self._stopped is not None:
+            self._stopped.set()
+
+    async def close(self) -> None:
+        if self._clock is not None:
+            self._clock.stop()
+            self._clock = None
+        if self._server is not None:
+            await self._server.shutdown()
+            self._server = None
+
+    async def serve_forever(self) -> None:
+        assert self._stopped is not None, "start() first"
+        await self._stopped.wait()
+
+    async def __aenter__(self) -> SoftPlc:
+        await self.start()
+        return self
+
+    async def __aexit__(self, *exc_info: object) -> None:
+        await self.close()
+
+
+class SoftPlcThread:
+    """`SoftPlc` in a background thread with its own event loop: `with SoftPlcThread(...) as plc:`."""
+
+    def __init__(self, program: ApplicationLike | Path | str, host: str = "127.0.0.1", port: int = 0,
+                 stepped: bool = False):
+        self.plc = SoftPlc(program, host, port, stepped)
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._thread: threading.Thread | None = None
+        self._ready = threading.Event()
+        self._error: BaseException | None = None
+
+    @property
+    def port(self) -> int:
+        assert self.plc.port is not None
+        return self.plc.port
+
+    @property
+    def engine(self) -> PlcEngine:
+        return self.plc.engine
+
+    def _run(self) -> None:
+        loop = self._loop
+        assert loop is not None
+        asyncio.set_event_loop(loop)
+        try:
+            loop.run_until_complete(self._main())
+        except BaseException as exc:  # noqa: BLE001 - reported to the starting thread
+            self._error = exc
+        finally:
+            self._ready.set()
+            loop.close()
+
+    async def _main(self) -> None:
+        async with self.plc:
+            self._ready.set()
+            await self.plc.serve_forever()
+
+    def __enter__(self) -> SoftPlcThread:
+        self._loop = asyncio.new_event_loop()
+        self._thread = threading.Thread(target=self._run, name="soft-plc", daemon=True)
+        self._thread.start()
+        self._ready.wait()
+        if self._error is not None:
+            raise self._error
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        if self._loop is not None and self._thread is not None and self._thread.is_alive():
+            self._loop.call_soon_threadsafe(self.plc.stop)
+            self._thread.join()

@@ -33,7 +33,10 @@ def _ordered(words: list[int], bits: int) -> int:
 
 def _is_nan(words: list[int]) -> bool:
     if len(words) == 2:
-        return struct.unpack(">f", struct.pack(">HH", *words))[0] != struct.unpack(">f", struct.pack(">HH", *words))[0]
+        return (
+            struct.unpack(">f", struct.pack(">HH", *words))[0]
+            != struct.unpack(">f", struct.pack(">HH", *words))[0]
+        )
     v = struct.unpack(">d", struct.pack(">HHHH", *words))[0]
     return v != v
 
@@ -63,6 +66,9 @@ def run_case(st_path: Path) -> tuple[list[str], list[str]]:
         if not ok and mode == "nan":
             ok = _is_nan(got)
         if not ok:
-            msg = f"{r['var']} ({r['iec_type']}, {mode}): got {got} = {var.get()!r}, want {want} = {r.get('value')!r}"
+            msg = (
+                f"{r['var']} ({r['iec_type']}, {mode}): got {got} = {var.get()!r}, "
+                f"want {want} = {r.get('value')!r}"
+            )
             (quirks if mode == "quirk" else failures).append(msg)
     return failures, quirks

@@ -10,7 +10,9 @@ SHARED = shared_dir()
 CASES = sorted((SHARED / "conformance").glob("*.st")) if SHARED else []
 
 
-@pytest.mark.skipif(SHARED is None, reason="../shared/conformance not found (set THERMOST_SHARED to its parent)")
+@pytest.mark.skipif(
+    SHARED is None, reason="../shared/conformance not found (set THERMOST_SHARED to its parent)"
+)
 @pytest.mark.parametrize("case", CASES, ids=[c.stem for c in CASES])
 def test_conformance_case(case, capsys):
     failures, quirks = run_case(case)

@@ -25,8 +25,17 @@ class LocatedVar:
 
 
 class Application:
-    def __init__(self, clock, programs: dict, intervals: dict[str, int], located: list[LocatedVar],
-                 globals_obj, pou_types: dict, global_vars: dict, code: str):
+    def __init__(
+        self,
+        clock,
+        programs: dict,
+        intervals: dict[str, int],
+        located: list[LocatedVar],
+        globals_obj,
+        pou_types: dict,
+        global_vars: dict,
+        code: str,
+    ):
         self.clock = clock
         self.programs = programs
         self.located = located
@@ -37,8 +46,10 @@ class Application:
         known = [iv for iv in intervals.values() if iv > 0]
         self.interval_ns = math.gcd(*known) if known else 10_000_000
         # each instance runs every `ratio` ticks (OpenPLC: tasks at multiples of the common tick)
-        self._schedule = [(obj, max(1, intervals[name] // self.interval_ns) if intervals[name] else 1)
-                          for name, obj in programs.items()]
+        self._schedule = [
+            (obj, max(1, intervals[name] // self.interval_ns) if intervals[name] else 1)
+            for name, obj in programs.items()
+        ]
         self.tick = 0
         self.fault: PlcRuntimeError | None = None
 

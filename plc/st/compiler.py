@@ -18,17 +18,32 @@ from plc.st import rt, stdfbs
 from plc.st.app import Application, LocatedVar
 from plc.st.diagnostics import Diagnostic, StError
 from plc.st.parser import ParsedSource, parse_source
-from plc.st.types import ANY_INT, ANY_REAL, BOOL, ELEMENTARY, LREAL, REAL, STRING, TIME, Type
+from plc.st.types import ANY_INT, ANY_REAL, BOOL, ELEMENTARY, REAL, STRING, TIME, Type
 
 SECTION_OF = {
-    "var_input": "in", "var_output": "out", "var_in_out": "inout", "var_block": "var",
-    "var_temp": "temp", "var_external": "ext", "var_global": "global",
+    "var_input": "in",
+    "var_output": "out",
+    "var_in_out": "inout",
+    "var_block": "var",
+    "var_temp": "temp",
+    "var_external": "ext",
+    "var_global": "global",
 }
 CMP_OPS = {"=": "==", "<>": "!=", "<": "<", ">": ">", "<=": "<=", ">=": ">="}
 ARITH_OPS = {"+", "-", "*", "/", "MOD"}
 BIT_OPS = {"AND": "&", "&": "&", "OR": "|", "XOR": "^"}
-MATH_FUNCS = {"SQRT": "sqrt", "EXP": "exp", "LN": "ln", "LOG": "log10", "SIN": "sin", "COS": "cos",
-              "TAN": "tan", "ASIN": "asin", "ACOS": "acos", "ATAN": "atan"}
+MATH_FUNCS = {
+    "SQRT": "sqrt",
+    "EXP": "exp",
+    "LN": "ln",
+    "LOG": "log10",
+    "SIN": "sin",
+    "COS": "cos",
+    "TAN": "tan",
+    "ASIN": "asin",
+    "ACOS": "acos",
+    "ATAN": "atan",
+}
 PY_PREFIX = {"function": "FN", "function_block": "FB", "program": "PR"}
 CONV_RE = re.compile(r"^([A-Z_]+?)_TO_([A-Z_]+)$")
 
@@ -324,7 +339,9 @@ class Compiler:
             if v.section == "ext":
                 g = self.globals.get(name)
                 if g is None:
-                    raise self.err(self.src, node, f"VAR_EXTERNAL '{name}' has no VAR_GLOBAL in the configuration")
+                    raise self.err(
+                        self.src, node, f"VAR_EXTERNAL '{name}' has no VAR_GLOBAL in the configuration"
+                    )
                 return f"G.v_{name}", v
             if self.mode == "function":
                 return f"v_{name}", v
@@ -361,7 +378,9 @@ class Compiler:
             return self.typed_literal(node)
         if k in ("string_literal", "character_string"):
             text = src.node_text(node)
-            return Ex(repr(text[1:-1].replace("$$", "$").replace("$N", "\n").replace("$'", "'")), STRING, "str")
+            return Ex(
+                repr(text[1:-1].replace("$$", "$").replace("$N", "\n").replace("$'", "'")), STRING, "str"
+            )
         if k == "identifier":
             return self.identifier(node, expected)
         if k == "unary_expression":
@@ -390,8 +409,9 @@ class Compiler:
             return Ex(repr(idx), et, "enum", idx)
         name = src.node_text(node).lower()
         pou = self.pou
-        if pou is not None and (name in pou.vars or (self.mode != "config" and name in self.globals
-                                                     and name in pou.vars)):
+        if pou is not None and (
+            name in pou.vars or (self.mode != "config" and name in self.globals and name in pou.vars)
+        ):
             code, v = self.ref_var(name, node)
             return Ex(code, v.type, _c_of(v.type))
         if pou is not None and pou.kind == "function" and name.upper() == pou.name:
@@ -445,7 +465,11 @@ class Compiler:
                 raise self.err(src, node, f"literal {text} out of range for {tname}")
             return Ex(repr(v), t, _c_of(t), v)
         if t.kind == "real":
-            v = float(self.int_literal(text)) if val.type == "integer_literal" else float(text.replace("_", ""))
+            v = (
+                float(self.int_literal(text))
+                if val.type == "integer_literal"
+                else float(text.replace("_", ""))
+            )
             if t is REAL:
                 v = rt.f32(v)
             return Ex(_py_float(v), t, _c_of(t), v)
@@ -464,7 +488,14 @@ class Compiler:
             return "d"
         if "f" in (a, b):
             return "f"
-        rank = {"i32": (32, 0), "u32": (32, 1), "i64": (64, 0), "u64": (64, 1), "bool": (32, 0), "enum": (32, 0)}
+        rank = {
+            "i32": (32, 0),
+            "u32": (32, 1),
+            "i64": (64, 0),
+            "u64": (64, 1),
+            "bool": (32, 0),
+            "enum": (32, 0),
+        }
         ra, rb = rank.get(a, (32, 0)), rank.get(b, (32, 0))
         if ra[0] != rb[0]:
             best = ra if ra[0] > rb[0] else rb
@@ -508,16 +539,25 @@ class Compiler:
         # ta is typed now
         if tb.kind == "anyint":
             if ta.kind == "real":
-                raise self.err(self.src, node, f"Data type mismatch for '{op}' expression "
-                                               f"(integer literal with {ta.name}: write a real literal)")
+                raise self.err(
+                    self.src,
+                    node,
+                    f"Data type mismatch for '{op}' expression "
+                    f"(integer literal with {ta.name}: write a real literal)",
+                )
             return ta
         if tb.kind == "anyreal":
             if ta.kind == "int":
-                raise self.err(self.src, node, f"Data type mismatch for '{op}' expression "
-                                               f"({ta.name} with a real literal)")
+                raise self.err(
+                    self.src,
+                    node,
+                    f"Data type mismatch for '{op}' expression ({ta.name} with a real literal)",
+                )
             return ta
         if ta is not tb and ta.name != tb.name:
-            raise self.err(self.src, node, f"Data type mismatch for '{op}' expression ({ta.name} {op} {tb.name})")
+            raise self.err(
+                self.src, node, f"Data type mismatch for '{op}' expression ({ta.name} {op} {tb.name})"
+            )
         return ta
 
     def literal_c(self, lit: Ex, other: Ex) -> Ex:
@@ -602,7 +642,9 @@ class Compiler:
     def bit_type(self, a: Ex, b: Ex, op: str, node: Node) -> Type:
         if a.t.kind in ("int", "anyint") and b.t.kind in ("int", "anyint"):
             if a.t.kind == "int" and b.t.kind == "int" and a.t.name != b.t.name:
-                raise self.err(self.src, node, f"Data type mismatch for '{op}' expression ({a.t.name}, {b.t.name})")
+                raise self.err(
+                    self.src, node, f"Data type mismatch for '{op}' expression ({a.t.name}, {b.t.name})"
+                )
             return a.t if a.t.kind == "int" else b.t
         raise self.err(self.src, node, f"Data type mismatch for '{op}' expression ({a.t.name}, {b.t.name})")
 
@@ -613,14 +655,22 @@ class Compiler:
             lit = ta if typed is tb else tb
             if typed.kind in ("int", "anyint") and lit.kind == "anyint":
                 return
-            if typed.kind in ("real", "anyreal", "anyint") and lit.kind in ("anyreal", "anyint") and \
-                    not (typed.kind == "real" and lit.kind == "anyint"):
+            if (
+                typed.kind in ("real", "anyreal", "anyint")
+                and lit.kind in ("anyreal", "anyint")
+                and not (typed.kind == "real" and lit.kind == "anyint")
+            ):
                 return
             if typed.kind == "int" and lit.kind == "anyreal":
-                raise self.err(self.src, node, f"Data type mismatch for '{op}' expression ({typed.name}, real literal)")
+                raise self.err(
+                    self.src, node, f"Data type mismatch for '{op}' expression ({typed.name}, real literal)"
+                )
             if typed.kind == "real" and lit.kind == "anyint":
-                raise self.err(self.src, node, f"Data type mismatch for '{op}' expression ({typed.name}, "
-                                               "integer literal)")
+                raise self.err(
+                    self.src,
+                    node,
+                    f"Data type mismatch for '{op}' expression ({typed.name}, integer literal)",
+                )
             return
         if ta.name != tb.name and not (ta.kind == tb.kind == "time"):
             raise self.err(self.src, node, f"Data type mismatch for '{op}' expression ({ta.name}, {tb.name})")
@@ -678,8 +728,11 @@ class Compiler:
                 raise self.err(self.src, node, f"function block '{t.name}' has no variable '{fname}'")
             ft, section = members[fname]
             if section not in ("in", "out", "inout"):
-                raise self.err(self.src, node, f"'{fname}' is internal to '{t.name}' (only inputs and outputs "
-                                               "are accessible)")
+                raise self.err(
+                    self.src,
+                    node,
+                    f"'{fname}' is internal to '{t.name}' (only inputs and outputs are accessible)",
+                )
             return Ex(f"{base.code}.v_{fname}", ft, _c_of(ft))
         raise self.err(self.src, node, f"'.{fname}' applied to a value of type {t.name}")
 
@@ -690,7 +743,9 @@ class Compiler:
             raise self.err(self.src, node, f"indexing a value of type {t.name}")
         idx_nodes = node.named_children[1:]
         if len(idx_nodes) != len(t.dims):
-            raise self.err(self.src, node, f"array has {len(t.dims)} dimension(s), {len(idx_nodes)} index(es) given")
+            raise self.err(
+                self.src, node, f"array has {len(t.dims)} dimension(s), {len(idx_nodes)} index(es) given"
+            )
         parts = []
         stride = 1
         strides = []
@@ -728,8 +783,12 @@ class Compiler:
                 if not self._needs_wrap(e) or e.code.startswith(wrap + "("):
                     return e.code
                 return f"{wrap}({e.code})"
-            raise self.err(self.src, node, f"Incompatible data types for {what} operation "
-                                           f"({src_t.name} to {dst.name}: use an explicit conversion)")
+            raise self.err(
+                self.src,
+                node,
+                f"Incompatible data types for {what} operation "
+                f"({src_t.name} to {dst.name}: use an explicit conversion)",
+            )
         if dst.kind == "real":
             if src_t.kind == "anyreal" or (src_t.kind == "real" and src_t.name == dst.name):
                 if dst is REAL and e.c != "f":
@@ -737,34 +796,53 @@ class Compiler:
                         return _py_float(rt.f32(float(e.const)))
                     return f"f32({e.code})"
                 return e.code
-            raise self.err(self.src, node, f"Incompatible data types for {what} operation "
-                                           f"({src_t.name} to {dst.name}"
-                                           + (": write a real literal such as 1.0)" if src_t.kind == "anyint"
-                                              else ": use an explicit conversion)"))
+            raise self.err(
+                self.src,
+                node,
+                f"Incompatible data types for {what} operation "
+                f"({src_t.name} to {dst.name}"
+                + (
+                    ": write a real literal such as 1.0)"
+                    if src_t.kind == "anyint"
+                    else ": use an explicit conversion)"
+                ),
+            )
         if dst.kind == "bool":
             if src_t.kind == "bool":
                 return e.code
-            raise self.err(self.src, node, f"Incompatible data types for {what} operation ({src_t.name} to BOOL)")
+            raise self.err(
+                self.src, node, f"Incompatible data types for {what} operation ({src_t.name} to BOOL)"
+            )
         if dst.kind == "time":
             if src_t.kind == "time":
                 return e.code
-            raise self.err(self.src, node, f"Incompatible data types for {what} operation ({src_t.name} to TIME)")
+            raise self.err(
+                self.src, node, f"Incompatible data types for {what} operation ({src_t.name} to TIME)"
+            )
         if dst.kind == "enum":
             if src_t is dst or (src_t.kind == "enum" and src_t.name == dst.name):
                 return e.code
-            raise self.err(self.src, node, f"Incompatible data types for {what} operation ({src_t.name} to {dst.name})")
+            raise self.err(
+                self.src, node, f"Incompatible data types for {what} operation ({src_t.name} to {dst.name})"
+            )
         if dst.kind in ("struct", "fb"):
             if src_t.kind == dst.kind and src_t.name == dst.name:
                 return f"{e.code}._copy()"
-            raise self.err(self.src, node, f"Incompatible data types for {what} operation ({src_t.name} to {dst.name})")
+            raise self.err(
+                self.src, node, f"Incompatible data types for {what} operation ({src_t.name} to {dst.name})"
+            )
         if dst.kind == "array":
             if src_t.kind == "array" and self.same_array(src_t, dst):
                 return f"copy_array({e.code})"
-            raise self.err(self.src, node, f"Incompatible data types for {what} operation (array shapes differ)")
+            raise self.err(
+                self.src, node, f"Incompatible data types for {what} operation (array shapes differ)"
+            )
         if dst.kind == "string":
             if src_t.kind == "string":
                 return e.code
-            raise self.err(self.src, node, f"Incompatible data types for {what} operation ({src_t.name} to STRING)")
+            raise self.err(
+                self.src, node, f"Incompatible data types for {what} operation ({src_t.name} to STRING)"
+            )
         raise self.err(self.src, node, f"cannot assign to a value of type {dst.name}")
 
     @staticmethod
@@ -773,8 +851,12 @@ class Compiler:
 
     @staticmethod
     def same_array(a: Type, b: Type) -> bool:
-        return a.dims == b.dims and a.elem is not None and b.elem is not None and \
-            (a.elem is b.elem or a.elem.name == b.elem.name)
+        return (
+            a.dims == b.dims
+            and a.elem is not None
+            and b.elem is not None
+            and (a.elem is b.elem or a.elem.name == b.elem.name)
+        )
 
     # ------------------------------------------------------------------ calls
     def call_args(self, node: Node) -> tuple[list[Node], dict[str, tuple[Node, str]]]:
@@ -804,7 +886,9 @@ class Compiler:
         if name in self.pous and self.pous[name].kind == "function":
             return self.user_call(self.pous[name], positional, named, node)
         if self.pou is not None and name.lower() in self.pou.vars:
-            raise self.err(self.src, node, "function block instances are called as statements, not in expressions")
+            raise self.err(
+                self.src, node, "function block instances are called as statements, not in expressions"
+            )
         if named and name not in self.pous:
             # standard functions called with formal names (IN1 := ...) map to their positions
             order = sorted(named)
@@ -904,8 +988,11 @@ class Compiler:
                 raise self.err(self.src, node, f"{name} needs at least 2 arguments")
             t = self.common_arg_type(args, node, name)
             codes = [self.as_type(a, t, node, name) for a in args]
-            return Ex(f"{name.lower()}({', '.join(codes)})", t, _c_of(t) if t.kind not in ("anyint",
-                                                                                           "anyreal") else args[0].c)
+            return Ex(
+                f"{name.lower()}({', '.join(codes)})",
+                t,
+                _c_of(t) if t.kind not in ("anyint", "anyreal") else args[0].c,
+            )
         if name == "LIMIT":
             need(3)
             t = self.common_arg_type(args, node, name)
@@ -961,12 +1048,17 @@ class Compiler:
             raise self.err(self.src, node, "cannot assign to a constant")
         return e
 
-    def user_call(self, pou: Pou, positional: list[Node], named: dict, node: Node,
-                  statement: bool = False) -> Ex:
+    def user_call(
+        self, pou: Pou, positional: list[Node], named: dict, node: Node, statement: bool = False
+    ) -> Ex:
         params = pou.params()
         if not params and not statement:
-            raise self.err(self.src, node, f"no parameter defined in function invocation of '{pou.name}' "
-                                           "(MatIEC needs at least one input)")
+            raise self.err(
+                self.src,
+                node,
+                f"no parameter defined in function invocation of '{pou.name}' "
+                "(MatIEC needs at least one input)",
+            )
         if len(positional) > len(params):
             raise self.err(self.src, node, f"too many arguments for '{pou.name}'")
         bound: dict[str, Node] = {}
@@ -1001,14 +1093,17 @@ class Compiler:
             else:
                 codes.append(self.convert_store(self.expr(a, p.type), p.type, a, what=f"'{p.name}' argument"))
         call = f"{pou.pyname}({', '.join(codes)})"
-        if not pou.outputs() and not any(p.section == "inout" and p.type.kind not in ("struct", "array", "fb")
-                                          for p in params):
+        if not pou.outputs() and not any(
+            p.section == "inout" and p.type.kind not in ("struct", "array", "fb") for p in params
+        ):
             return Ex(call, pou.ret, _c_of(pou.ret))
         tmp = self.new_tmp()
         self.pre.append(f"{tmp} = {call}")
         out_index = {v.name: i + 1 for i, v in enumerate(pou.outputs())}
         base = 1 + len(pou.outputs())
-        scalar_inouts = [p for p in params if p.section == "inout" and p.type.kind not in ("struct", "array", "fb")]
+        scalar_inouts = [
+            p for p in params if p.section == "inout" and p.type.kind not in ("struct", "array", "fb")
+        ]
         for pname, target in outs:
             if target is None:
                 continue
@@ -1135,8 +1230,13 @@ class Compiler:
                     cond_node = kids[i + 1]
                     j = i + 3
                     stmts = []
-                    while j < len(kids) and kids[j].type not in ("ELSIF", "ELSE", "END_IF", "elsif_clause",
-                                                                  "else_clause"):
+                    while j < len(kids) and kids[j].type not in (
+                        "ELSIF",
+                        "ELSE",
+                        "END_IF",
+                        "elsif_clause",
+                        "else_clause",
+                    ):
                         if kids[j].is_named:
                             stmts.append(kids[j])
                         j += 1
@@ -1201,8 +1301,9 @@ class Compiler:
                         else:
                             e = self.expr(v, sel.t if sel.t.kind == "enum" else None)
                             if sel.t.kind == "enum" and e.t is not sel.t and v.type == "identifier":
-                                raise self.err(self.src, v, f"'{self.src.node_text(v)}' is not a value of "
-                                                            f"{sel.t.name}")
+                                raise self.err(
+                                    self.src, v, f"'{self.src.node_text(v)}' is not a value of {sel.t.name}"
+                                )
                             conds.append(f"{tmp} == {e.code}")
                     elif c.type != "comment":
                         stmts.append(c)
@@ -1233,7 +1334,7 @@ class Compiler:
         start_node = kids[to_i - 1]
         end_node = kids[to_i + 1]
         step_node = kids[by_i + 1] if by_i is not None else None
-        stmts = [c for c in kids[do_i + 1:] if c.is_named and c.type != "comment"]
+        stmts = [c for c in kids[do_i + 1 :] if c.is_named and c.type != "comment"]
         del named_after
         lv = self.lvalue(var_node)
         if lv.t.kind != "int":
@@ -1257,7 +1358,9 @@ class Compiler:
             cmp = "<=" if step.const > 0 else ">="
             self.emit(f"if not ({lv.code} {cmp} {end.code}):")
         else:
-            self.emit(f"if not (({lv.code} <= {end.code}) if {step.code} > 0 else ({lv.code} >= {end.code})):")
+            self.emit(
+                f"if not (({lv.code} <= {end.code}) if {step.code} > 0 else ({lv.code} >= {end.code})):"
+            )
         self.emit("    break")
         self.loop_depth += 1
         self.body(stmts)
@@ -1269,8 +1372,11 @@ class Compiler:
         positional, named = self.call_args(call)
         if target.type == "identifier":
             name = self.src.node_text(target).upper()
-            if name in self.pous and self.pous[name].kind == "function" and \
-                    (self.pou is None or name.lower() not in self.pou.vars):
+            if (
+                name in self.pous
+                and self.pous[name].kind == "function"
+                and (self.pou is None or name.lower() not in self.pou.vars)
+            ):
                 e = self.user_call(self.pous[name], positional, named, call, statement=True)
                 self.flush_pre()
                 if not e.code.startswith("_t"):
@@ -1357,7 +1463,7 @@ class Compiler:
         if isinstance(init, tuple) and init[0] == "array":
             _, decl, start = init
             items = []
-            for c in decl.children[start + 1:]:
+            for c in decl.children[start + 1 :]:
                 if c.type == "]":
                     break
                 if c.is_named and c.type != "comment":
@@ -1431,7 +1537,9 @@ class Compiler:
             else:
                 codes.append(self.init_code(t.elem, it))
         if len(codes) > t.size:
-            raise self.err(self.src, where, f"array initialiser has {len(codes)} values for {t.size} elements")
+            raise self.err(
+                self.src, where, f"array initialiser has {len(codes)} values for {t.size} elements"
+            )
         rest = t.size - len(codes)
         if rest:
             codes.extend([self.default_code(t.elem)] * rest)
@@ -1480,9 +1588,13 @@ class Compiler:
         self.tmp = 0
         self.pre = []
         self.loop_depth = 0
-        stmts = [c for c in pou.node.named_children
-                 if c.type not in SECTION_OF and c.type not in ("identifier", "comment", "elementary_type")
-                 and not c.type.endswith("_type")]
+        stmts = [
+            c
+            for c in pou.node.named_children
+            if c.type not in SECTION_OF
+            and c.type not in ("identifier", "comment", "elementary_type")
+            and not c.type.endswith("_type")
+        ]
         if pou.kind == "function":
             stmts = stmts[0:]
             self.gen_function(pou, stmts)
@@ -1538,7 +1650,9 @@ class Compiler:
         self.mode = "function"
         params = pou.params()
         outputs = pou.outputs()
-        scalar_inouts = [p for p in params if p.section == "inout" and p.type.kind not in ("struct", "array", "fb")]
+        scalar_inouts = [
+            p for p in params if p.section == "inout" and p.type.kind not in ("struct", "array", "fb")
+        ]
         self.indent = 0
         self.emit(f"def {pou.pyname}({', '.join('v_' + p.name for p in params)}):")
         self.indent = 1
@@ -1551,8 +1665,13 @@ class Compiler:
             v = pou.vars[n]
             if v.section in ("var", "temp", "out"):
                 if v.type.kind == "fb":
-                    self.diags.append(v.src.diag(pou.node, f"function block instance '{n}' declared inside "
-                                                           f"FUNCTION '{pou.name}' (MatIEC rejects it)"))
+                    self.diags.append(
+                        v.src.diag(
+                            pou.node,
+                            f"function block instance '{n}' declared inside "
+                            f"FUNCTION '{pou.name}' (MatIEC rejects it)",
+                        )
+                    )
                     continue
                 try:
                     self.emit(f"v_{n} = {self.init_code(v.type, v.init)}")
@@ -1605,7 +1724,10 @@ class Compiler:
                     tname = src.node_text(c.named_children[0]).lower()
                     interval = 0
                     for p in c.named_children[1:]:
-                        if p.type == "task_parameter" and src.node_text(p.named_children[0]).upper() == "INTERVAL":
+                        if (
+                            p.type == "task_parameter"
+                            and src.node_text(p.named_children[0]).upper() == "INTERVAL"
+                        ):
                             interval = self.expr(p.named_children[-1]).const or 0
                     tasks[tname] = interval
                 elif c.type == "program_assignment":
@@ -1649,11 +1771,20 @@ class Compiler:
                     continue
                 g = self.globals.get(v.name)
                 if g is None:
-                    self.diags.append(v.src.diag(pou.node, f"VAR_EXTERNAL '{v.name}' of '{pou.name}' has no "
-                                                           "VAR_GLOBAL in the CONFIGURATION"))
+                    self.diags.append(
+                        v.src.diag(
+                            pou.node,
+                            f"VAR_EXTERNAL '{v.name}' of '{pou.name}' has no VAR_GLOBAL in the CONFIGURATION",
+                        )
+                    )
                 elif g.constant and not v.constant:
-                    self.diags.append(v.src.diag(pou.node, f"VAR_EXTERNAL '{v.name}' must be declared CONSTANT: "
-                                                           "it maps to a constant global variable"))
+                    self.diags.append(
+                        v.src.diag(
+                            pou.node,
+                            f"VAR_EXTERNAL '{v.name}' must be declared CONSTANT: "
+                            "it maps to a constant global variable",
+                        )
+                    )
 
     # ------------------------------------------------------------------ driver
     def compile(self) -> tuple[str, list[tuple[str, str, int]]]:
@@ -1802,8 +1933,18 @@ def _located_vars(comp: Compiler, programs: dict, G) -> list[LocatedVar]:
                 continue
             area, size, index, bit = m.group(1), m.group(2) or "X", int(m.group(3)), m.group(4)
             attr = f"v_{name}"
-            out.append(LocatedVar(
-                name=name, instance=inst, location=v.location, area=area, size=size, index=index,
-                bit=int(bit) if bit is not None else None, iec_type=v.type.name,
-                get=(lambda o=obj, a=attr: getattr(o, a)), set=_setter(obj, attr, v.type)))
+            out.append(
+                LocatedVar(
+                    name=name,
+                    instance=inst,
+                    location=v.location,
+                    area=area,
+                    size=size,
+                    index=index,
+                    bit=int(bit) if bit is not None else None,
+                    iec_type=v.type.name,
+                    get=(lambda o=obj, a=attr: getattr(o, a)),
+                    set=_setter(obj, attr, v.type),
+                )
+            )
     return out

@@ -23,9 +23,33 @@ import tree_sitter_iec61131_3_st
 from plc.st.diagnostics import Diagnostic
 
 LITERAL_PREFIXES = {
-    "SINT", "INT", "DINT", "LINT", "USINT", "UINT", "UDINT", "ULINT", "REAL", "LREAL", "BOOL",
-    "BYTE", "WORD", "DWORD", "LWORD", "T", "TIME", "LT", "LTIME", "D", "DATE", "TOD", "TIME_OF_DAY",
-    "DT", "DATE_AND_TIME", "STRING", "WSTRING",
+    "SINT",
+    "INT",
+    "DINT",
+    "LINT",
+    "USINT",
+    "UINT",
+    "UDINT",
+    "ULINT",
+    "REAL",
+    "LREAL",
+    "BOOL",
+    "BYTE",
+    "WORD",
+    "DWORD",
+    "LWORD",
+    "T",
+    "TIME",
+    "LT",
+    "LTIME",
+    "D",
+    "DATE",
+    "TOD",
+    "TIME_OF_DAY",
+    "DT",
+    "DATE_AND_TIME",
+    "STRING",
+    "WSTRING",
 }
 
 _ENUM_LITERAL = re.compile(r"\b([A-Za-z_]\w*)#([A-Za-z_]\w*)")
@@ -90,7 +114,7 @@ class ParsedSource:
     type_initializers: dict[int, str] = field(default_factory=dict)
 
     def node_text(self, node: tree_sitter.Node) -> str:
-        return self.src[node.start_byte:node.end_byte].decode("utf-8", "replace")
+        return self.src[node.start_byte : node.end_byte].decode("utf-8", "replace")
 
     def position(self, node: tree_sitter.Node) -> tuple[int, int]:
         return node.start_point[0] + 1, node.start_point[1] + 1
@@ -149,7 +173,7 @@ def _rewrite(text: str) -> tuple[str, dict[int, tuple[str, str]], dict[int, str]
             end = _matching(text, m.start(1), mask)
             if end < 0:
                 continue
-            type_inits[m.start()] = text[m.start(1):end]
+            type_inits[m.start()] = text[m.start(1) : end]
             for k in range(m.start(), end):
                 if chars[k] != "\n":
                     chars[k] = " "

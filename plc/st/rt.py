@@ -61,8 +61,14 @@ def wu64(x: int) -> int:
 
 
 WRAP = {
-    (8, True): ws8, (16, True): ws16, (32, True): ws32, (64, True): ws64,
-    (8, False): wu8, (16, False): wu16, (32, False): wu32, (64, False): wu64,
+    (8, True): ws8,
+    (16, True): ws16,
+    (32, True): ws32,
+    (64, True): ws64,
+    (8, False): wu8,
+    (16, False): wu16,
+    (32, False): wu32,
+    (64, False): wu64,
 }
 
 

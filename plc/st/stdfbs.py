@@ -127,7 +127,11 @@ class R_TRIG(_Plain):
 
 class F_TRIG(_Plain):
     __slots__ = ("v_clk", "v_q", "m")
-    FIELDS = (("v_clk", False), ("v_q", False), ("m", True))  # M holds NOT CLK, starts TRUE: no edge in scan 1
+    FIELDS = (
+        ("v_clk", False),
+        ("v_q", False),
+        ("m", True),
+    )  # M holds NOT CLK, starts TRUE: no edge in scan 1
 
     def _run(self) -> None:
         self.v_q = bool(not self.v_clk and not self.m)
@@ -180,8 +184,18 @@ class CTD(_Plain):
 
 class CTUD(_Plain):
     __slots__ = ("v_cu", "v_cd", "v_r", "v_ld", "v_pv", "v_qu", "v_qd", "v_cv", "mu", "md")
-    FIELDS = (("v_cu", False), ("v_cd", False), ("v_r", False), ("v_ld", False), ("v_pv", 0),
-              ("v_qu", False), ("v_qd", False), ("v_cv", 0), ("mu", False), ("md", False))
+    FIELDS = (
+        ("v_cu", False),
+        ("v_cd", False),
+        ("v_r", False),
+        ("v_ld", False),
+        ("v_pv", 0),
+        ("v_qu", False),
+        ("v_qd", False),
+        ("v_cv", 0),
+        ("mu", False),
+        ("md", False),
+    )
 
     def _run(self) -> None:
         up = self.v_cu and not self.mu
@@ -210,10 +224,37 @@ STANDARD_FBS = {
     "F_TRIG": (F_TRIG, {"clk": ("BOOL", "in"), "q": ("BOOL", "out")}),
     "SR": (SR, {"s1": ("BOOL", "in"), "r": ("BOOL", "in"), "q1": ("BOOL", "out")}),
     "RS": (RS, {"s": ("BOOL", "in"), "r1": ("BOOL", "in"), "q1": ("BOOL", "out")}),
-    "CTU": (CTU, {"cu": ("BOOL", "in"), "r": ("BOOL", "in"), "pv": ("INT", "in"), "q": ("BOOL", "out"),
-                  "cv": ("INT", "out")}),
-    "CTD": (CTD, {"cd": ("BOOL", "in"), "ld": ("BOOL", "in"), "pv": ("INT", "in"), "q": ("BOOL", "out"),
-                  "cv": ("INT", "out")}),
-    "CTUD": (CTUD, {"cu": ("BOOL", "in"), "cd": ("BOOL", "in"), "r": ("BOOL", "in"), "ld": ("BOOL", "in"),
-                    "pv": ("INT", "in"), "qu": ("BOOL", "out"), "qd": ("BOOL", "out"), "cv": ("INT", "out")}),
+    "CTU": (
+        CTU,
+        {
+            "cu": ("BOOL", "in"),
+            "r": ("BOOL", "in"),
+            "pv": ("INT", "in"),
+            "q": ("BOOL", "out"),
+            "cv": ("INT", "out"),
+        },
+    ),
+    "CTD": (
+        CTD,
+        {
+            "cd": ("BOOL", "in"),
+            "ld": ("BOOL", "in"),
+            "pv": ("INT", "in"),
+            "q": ("BOOL", "out"),
+            "cv": ("INT", "out"),
+        },
+    ),
+    "CTUD": (
+        CTUD,
+        {
+            "cu": ("BOOL", "in"),
+            "cd": ("BOOL", "in"),
+            "r": ("BOOL", "in"),
+            "ld": ("BOOL", "in"),
+            "pv": ("INT", "in"),
+            "qu": ("BOOL", "out"),
+            "qd": ("BOOL", "out"),
+            "cv": ("INT", "out"),
+        },
+    ),
 }

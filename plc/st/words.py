@@ -6,12 +6,39 @@ import struct
 
 from plc.st import rt
 
-WORDS = {"BOOL": 1, "SINT": 1, "USINT": 1, "BYTE": 1, "INT": 1, "UINT": 1, "WORD": 1,
-         "DINT": 2, "UDINT": 2, "DWORD": 2, "REAL": 2, "TIME": 2,
-         "LINT": 4, "ULINT": 4, "LWORD": 4, "LREAL": 4}
+WORDS = {
+    "BOOL": 1,
+    "SINT": 1,
+    "USINT": 1,
+    "BYTE": 1,
+    "INT": 1,
+    "UINT": 1,
+    "WORD": 1,
+    "DINT": 2,
+    "UDINT": 2,
+    "DWORD": 2,
+    "REAL": 2,
+    "TIME": 2,
+    "LINT": 4,
+    "ULINT": 4,
+    "LWORD": 4,
+    "LREAL": 4,
+}
 SIGNED = {"SINT", "INT", "DINT", "LINT"}
-BITS = {"SINT": 8, "USINT": 8, "BYTE": 8, "INT": 16, "UINT": 16, "WORD": 16, "DINT": 32, "UDINT": 32,
-        "DWORD": 32, "LINT": 64, "ULINT": 64, "LWORD": 64}
+BITS = {
+    "SINT": 8,
+    "USINT": 8,
+    "BYTE": 8,
+    "INT": 16,
+    "UINT": 16,
+    "WORD": 16,
+    "DINT": 32,
+    "UDINT": 32,
+    "DWORD": 32,
+    "LINT": 64,
+    "ULINT": 64,
+    "LWORD": 64,
+}
 
 
 def to_words(value, iec_type: str, count: int | None = None) -> list[int]:

@@ -62,6 +62,7 @@ class Var:
     location: str | None = None
     constant: bool = False
     src: ParsedSource | None = None
+    decl_name: str = ""  # as written in the source (the register map keeps the user's spelling)
 
 
 @dataclass
@@ -96,6 +97,11 @@ def _c_of(t: Type) -> str:
     if t.kind == "bool":
         return "bool"
     return t.ctype
+
+
+def _tn(t: Type) -> str:
+    """Type name for messages (untyped literals read as such)."""
+    return {"anyint": "integer literal", "anyreal": "real literal"}.get(t.kind, t.name)
 
 
 def _int_range(t: Type) -> tuple[int, int]:
@@ -287,7 +293,7 @@ class Compiler:
             for i, c in enumerate(kids):
                 if state == "names":
                     if c.type == "identifier":
-                        names.append(src.node_text(c).lower())
+                        names.append(src.node_text(c))
                     elif c.type == "AT":
                         state = "at"
                     elif c.type == ":":
@@ -308,10 +314,11 @@ class Compiler:
             if spec is None:
                 raise self.err(src, decl, "variable declaration without a type")
             t = self.type_from_spec(spec, src)
-            for n in names:
+            for written in names:
+                n = written.lower()
                 if n in into:
-                    raise self.err(src, decl, f"duplicate variable '{n}'")
-                into[n] = Var(n, t, section, init, location, constant, src)
+                    raise self.err(src, decl, f"duplicate variable '{written}'")
+                into[n] = Var(n, t, section, init, location, constant, src, written)
                 order.append(n)
 
     def declare_pou(self, pou: Pou) -> None:
@@ -787,7 +794,7 @@ class Compiler:
                 self.src,
                 node,
                 f"Incompatible data types for {what} operation "
-                f"({src_t.name} to {dst.name}: use an explicit conversion)",
+                f"({_tn(src_t)} to {dst.name}: use an explicit conversion)",
             )
         if dst.kind == "real":
             if src_t.kind == "anyreal" or (src_t.kind == "real" and src_t.name == dst.name):
@@ -800,7 +807,7 @@ class Compiler:
                 self.src,
                 node,
                 f"Incompatible data types for {what} operation "
-                f"({src_t.name} to {dst.name}"
+                f"({_tn(src_t)} to {dst.name}"
                 + (
                     ": write a real literal such as 1.0)"
                     if src_t.kind == "anyint"
@@ -811,25 +818,25 @@ class Compiler:
             if src_t.kind == "bool":
                 return e.code
             raise self.err(
-                self.src, node, f"Incompatible data types for {what} operation ({src_t.name} to BOOL)"
+                self.src, node, f"Incompatible data types for {what} operation ({_tn(src_t)} to BOOL)"
             )
         if dst.kind == "time":
             if src_t.kind == "time":
                 return e.code
             raise self.err(
-                self.src, node, f"Incompatible data types for {what} operation ({src_t.name} to TIME)"
+                self.src, node, f"Incompatible data types for {what} operation ({_tn(src_t)} to TIME)"
             )
         if dst.kind == "enum":
             if src_t is dst or (src_t.kind == "enum" and src_t.name == dst.name):
                 return e.code
             raise self.err(
-                self.src, node, f"Incompatible data types for {what} operation ({src_t.name} to {dst.name})"
+                self.src, node, f"Incompatible data types for {what} operation ({_tn(src_t)} to {dst.name})"
             )
         if dst.kind in ("struct", "fb"):
             if src_t.kind == dst.kind and src_t.name == dst.name:
                 return f"{e.code}._copy()"
             raise self.err(
-                self.src, node, f"Incompatible data types for {what} operation ({src_t.name} to {dst.name})"
+                self.src, node, f"Incompatible data types for {what} operation ({_tn(src_t)} to {dst.name})"
             )
         if dst.kind == "array":
             if src_t.kind == "array" and self.same_array(src_t, dst):
@@ -841,7 +848,7 @@ class Compiler:
             if src_t.kind == "string":
                 return e.code
             raise self.err(
-                self.src, node, f"Incompatible data types for {what} operation ({src_t.name} to STRING)"
+                self.src, node, f"Incompatible data types for {what} operation ({_tn(src_t)} to STRING)"
             )
         raise self.err(self.src, node, f"cannot assign to a value of type {dst.name}")
 
@@ -1935,7 +1942,7 @@ def _located_vars(comp: Compiler, programs: dict, G) -> list[LocatedVar]:
             attr = f"v_{name}"
             out.append(
                 LocatedVar(
-                    name=name,
+                    name=v.decl_name or name,
                     instance=inst,
                     location=v.location,
                     area=area,

@@ -1,0 +1,46 @@
+"""Compile what the project ships with the real MatIEC iec2c (OpenPLC's flags) when it is available.
+
+Set IEC2C to the iec2c binary and IEC2C_LIB to its include folder (OpenPLC's webserver/lib, holding
+ieclib.txt). Without them the test is skipped with the reason printed.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+IEC2C = os.environ.get("IEC2C")
+IEC2C_LIB = os.environ.get("IEC2C_LIB")
+OPENPLC_FLAGS = ["-f", "-l", "-p", "-r", "-R", "-a"]
+
+pytestmark = pytest.mark.realtools
+
+
+def _shipped_units() -> list[tuple[str, str]]:
+    from plc.bundle import bundle_text
+
+    units = [("thermost_openplc.st", bundle_text())]
+    lib_files = sorted(p for p in (ROOT / "st_lib").rglob("*.st") if "twincat" not in p.parts)
+    if lib_files:
+        units.append(("thermost_library_only.st", "\n".join(p.read_text() for p in lib_files)))
+    return units
+
+
+@pytest.mark.skipif(not IEC2C, reason="IEC2C not set: the real MatIEC compiler check was not run")
+@pytest.mark.parametrize("unit", ["thermost_openplc.st", "thermost_library_only.st"])
+def test_iec2c_accepts_shipped_st(unit, tmp_path):
+    units = dict(_shipped_units())
+    if unit not in units:
+        pytest.skip(f"{unit}: nothing to compile yet")
+    src = tmp_path / unit
+    src.write_text(units[unit])
+    cmd = [IEC2C, *OPENPLC_FLAGS]
+    if IEC2C_LIB:
+        cmd += ["-I", IEC2C_LIB]
+    cmd += ["-T", str(tmp_path), str(src)]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, f"iec2c exit {proc.returncode}:\n{proc.stdout}\n{proc.stderr}"

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import struct
 import threading
 from pathlib import Path
 
@@ -28,6 +29,11 @@ log = logging.getLogger("thermost.plc")
 NS_PER_S = 1e9
 MBAP_SIZE = 7  # transaction id, protocol id, length, unit id
 MBAP_PROTOCOL_SLICE = slice(2, 4)
+MBAP = struct.Struct(">HHHB")
+WRITE_SINGLE_COIL = 5
+FC5_FRAME_SIZE = MBAP_SIZE + 5  # function, address, value
+FC5_VALUE_SLICE = slice(MBAP_SIZE + 3, MBAP_SIZE + 5)
+COIL_VALUES = (0x0000, 0xFF00)
 
 
 def load_program(program: ApplicationLike | Path | str, filename: str = "<source>") -> ApplicationLike:
@@ -41,6 +47,14 @@ def load_program(program: ApplicationLike | Path | str, filename: str = "<source
     return load_application([(filename, str(program))])
 
 
+def _refused_single_coil_frame(frame: bytes) -> int | None:
+    """Length of a complete FC5 frame whose value is neither 0x0000 nor 0xFF00 (Modbus: exception 3)."""
+    if len(frame) < FC5_FRAME_SIZE or frame[MBAP_SIZE] != WRITE_SINGLE_COIL:
+        return None
+    value = int.from_bytes(frame[FC5_VALUE_SLICE], "big")
+    return FC5_FRAME_SIZE if value not in COIL_VALUES else None
+
+
 class _PlcRequestHandler(ServerRequestHandler):
     """Per-connection handler: decodes every frame in the buffer and answers it at once."""
 
@@ -51,6 +65,10 @@ class _PlcRequestHandler(ServerRequestHandler):
             if len(rest) >= MBAP_SIZE and rest[MBAP_PROTOCOL_SLICE] != b"\0\0":
                 log.warning("dropping %d bytes: not Modbus TCP (protocol id is not 0)", len(rest))
                 return len(data)
+            if (refused := _refused_single_coil_frame(rest)) is not None:
+                self._send_exception(rest, ExcCodes.ILLEGAL_VALUE, addr)
+                consumed += refused
+                continue
             try:
                 used = TransactionManager.callback_data(self, rest, addr)
             except ModbusIOException as exc:
@@ -67,9 +85,13 @@ class _PlcRequestHandler(ServerRequestHandler):
         """A frame pymodbus cannot decode: bad quantity/length for a known code, or an unknown code."""
         function_code = frame[MBAP_SIZE] & 0x7F if len(frame) > MBAP_SIZE else 0
         known = function_code in self.server.decoder.list_function_codes()
-        code = ExcCodes.ILLEGAL_VALUE if known else ExcCodes.ILLEGAL_FUNCTION
-        response = ExceptionResponse(function_code, exception_code=code, device_id=exc.dev_id or 0,
-                                     transaction=exc.transaction_id or 0)
+        self._send_exception(frame, ExcCodes.ILLEGAL_VALUE if known else ExcCodes.ILLEGAL_FUNCTION, addr)
+
+    def _send_exception(self, frame: bytes, code: ExcCodes, addr: tuple | None) -> None:
+        """Exception response to the (raw) request at the start of `frame`."""
+        tid, _, _, unit = MBAP.unpack_from(frame)
+        function_code = frame[MBAP_SIZE] & 0x7F if len(frame) > MBAP_SIZE else 0
+        response = ExceptionResponse(function_code, exception_code=code, device_id=unit, transaction=tid)
         self.server_send(response, addr)
 
     def _answer(self, pdu: ModbusPDU, addr: tuple | None) -> None:

@@ -1,0 +1,80 @@
+"""`thermost plc [FILE.st] --port N [--stepped]`: run the soft-PLC until Ctrl-C / SIGTERM.
+
+Without FILE it runs the bundle (`thermost bundle`: library + application + CONFIGURATION).
+The first stdout line is `soft-PLC listening on HOST:PORT ...` (port 0 = ephemeral port).
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import logging
+import signal
+import sys
+from pathlib import Path
+
+from plc.cli import UserError
+from plc.runtime.engine import ApplicationLike
+from plc.runtime.server import SoftPlc
+
+NS_PER_MS = 1e6
+BUNDLE_NAME = "<thermost bundle>"
+
+
+def configure_logging() -> None:
+    logging.basicConfig(
+        level=logging.INFO, stream=sys.stderr, format="thermost plc: %(levelname)s %(message)s"
+    )
+
+
+def load_for_cli(file: str | None) -> ApplicationLike:
+    """Compile FILE (or the bundle); compile errors become one `file:line:col: message` line each."""
+    from plc.st.compiler import load_application
+    from plc.st.diagnostics import StError
+
+    if file is None:
+        from plc.bundle import bundle_text
+
+        filename, text = BUNDLE_NAME, bundle_text()
+    else:
+        path = Path(file)
+        if not path.is_file():
+            raise UserError(f"no such file: {file}")
+        filename, text = str(path), path.read_text(encoding="utf-8")
+    try:
+        return load_application([(filename, text)])
+    except StError as exc:
+        for diagnostic in getattr(exc, "diagnostics", []):
+            sys.stderr.write(f"{diagnostic}\n")
+        raise UserError(f"{filename} does not compile") from exc
+
+
+async def serve(app: ApplicationLike, host: str, port: int, stepped: bool) -> int:
+    plc = SoftPlc(app, host=host, port=port, stepped=stepped)
+    loop = asyncio.get_running_loop()
+    try:
+        await plc.start()
+    except OSError as exc:
+        raise UserError(str(exc)) from exc
+    try:
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            loop.add_signal_handler(sig, plc.stop)
+        mode = "stepped (STEP register 60000)" if stepped else "real time"
+        print(
+            f"soft-PLC listening on {host}:{plc.port} ({mode}, interval {app.interval_ns / NS_PER_MS:g} ms, "
+            f"{len(plc.image.slots())} located variables served)",
+            flush=True,
+        )
+        await plc.serve_forever()
+    finally:
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            loop.remove_signal_handler(sig)
+        await plc.close()
+    logging.getLogger("thermost.plc").info("stopped after %d scans", plc.engine.scan_count)
+    return 0
+
+
+def main_plc(args: argparse.Namespace) -> int:
+    configure_logging()
+    app = load_for_cli(args.file)
+    return asyncio.run(serve(app, args.host, args.port, args.stepped))

@@ -16,16 +16,16 @@ from dataclasses import dataclass
 from pymodbus.client import AsyncModbusTcpClient
 from pymodbus.exceptions import ConnectionException, ModbusException, ModbusIOException
 
+from plc.runtime import control as ctl  # control block layout of the soft-PLC
+
 from .regmap import COIL, DISCRETE, HOLDING, INPUT, RegisterMap, Tag
 
-STEP_REGISTER = 60000
-STATUS_REGISTER = 60002
-FAULT_CODE_REGISTER = 60003
-SCAN_COUNT_REGISTER = 60004
-PLC_TIME_NS_REGISTER = 60006
-MODE_REGISTER = 60016
-FAULT_TEXT_REGISTER = 60020
-FAULT_TEXT_WORDS = 64
+STEP_REGISTER = ctl.STEP
+SCAN_COUNT_REGISTER = ctl.SCAN_COUNT
+MODE_REGISTER = ctl.MODE
+INTERVAL_NS_REGISTER = ctl.INTERVAL_NS
+FAULT_TEXT_REGISTER = ctl.FAULT_TEXT
+FAULT_TEXT_WORDS = ctl.FAULT_TEXT_WORDS
 MAX_READ_REGISTERS = 125  # Modbus limit per read request
 MAX_WRITE_REGISTERS = 123
 MAX_READ_BITS = 2000
@@ -246,6 +246,17 @@ class PlcClient:
             "read of the scan counter", "read_holding_registers", SCAN_COUNT_REGISTER, count=2
         )
         return (r.registers[0] << 16) | r.registers[1]
+
+    async def stepped(self) -> bool:
+        """True for a soft-PLC in stepped mode; False for real time or a PLC without the control block
+        (a real OpenPLC answers those addresses with an exception)."""
+        try:
+            r = await self._call("read of the clock mode", "read_holding_registers", MODE_REGISTER, count=1)
+        except PlcError as exc:
+            if "refused" in str(exc):
+                return False
+            raise
+        return r.registers[0] == ctl.MODE_STEPPED
 
     async def fault_text(self) -> str:
         r = await self._call(

@@ -17,6 +17,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 KELVIN_OFFSET = 273.15
+# what a sensor with no raw path reads when detached (open) or shorted (an NTC-like behaviour)
+OPEN_READING_C = -KELVIN_OFFSET
+SHORT_READING_C = 1000.0
+SENSOR_FAULTS = ("none", "open", "short")
 
 # IEC 60751 Callendar–Van Dusen coefficients (seed 000 quotes the same values).
 CVD_A = 3.9083e-3
@@ -109,6 +113,7 @@ class Sensor:
     adc: AdcFrontEnd = field(default_factory=AdcFrontEnd)
     seed: int = 0
     offset_c: float = 0.0
+    fault: str = "none"
     _state: float | None = field(default=None, init=False, repr=False)
     _rng: np.random.Generator = field(init=False, repr=False)
     last_counts: int = field(default=0, init=False)
@@ -128,6 +133,8 @@ class Sensor:
             self._state = alpha * self._state + (1.0 - alpha) * true_temp_c
         else:
             self._state = true_temp_c
+        if self.fault != "none":
+            return self._faulted()
         value = self._state + self.offset_c
         if self.noise_sigma_c > 0.0:
             value += float(self._rng.normal(0.0, self.noise_sigma_c))
@@ -135,3 +142,14 @@ class Sensor:
             self.last_counts = self.adc.to_counts(value)
             return self.adc.from_counts(self.last_counts)
         return value
+
+    def _faulted(self) -> float:
+        """Open or shorted sensor: the raw value goes to the end of the ADC range."""
+        if self.adc.kind == "none":
+            return OPEN_READING_C if self.fault == "open" else SHORT_READING_C
+        open_counts = self.adc.full_scale
+        if self.adc.kind == "pt100":  # open RTD: infinite resistance reads full scale
+            self.last_counts = open_counts if self.fault == "open" else 0
+        else:  # NTC with pull-up: open reads full scale (very cold), short reads 0 (very hot)
+            self.last_counts = open_counts if self.fault == "open" else 0
+        return self.adc.from_counts(self.last_counts)

@@ -1,0 +1,115 @@
+"""Metrics of a finished run: one record per zone and phase (metric names as in metrics.py / control.md).
+
+Per phase:
+- a setpoint step at the phase start (not a ramp): step metrics from the phase start, y0 = process value
+  at the start, y_final = the new setpoint;
+- a TUNE phase: tuning_duration_s (until the controller reports TUNED), the identified plant
+  (ks, tu, tg) and the PV excursion during tuning;
+- a load/ambient/fan/filament disturbance: max deviation and recovery into the 2 % band of the last
+  setpoint step (so "back inside the 2 % band" means the same band as the step's settling);
+- a ramp: tracking error (IAE, max |e|) over the phase;
+- always: output total variation, saturation time, PWM switches per minute (PWM runs).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .loop import PhaseRecord, RunResult, ZoneTrace
+from .metrics import (
+    BAND_2PCT,
+    StepWindow,
+    disturbance_metrics,
+    effort_metrics,
+    error_integrals,
+    step_metrics,
+)
+
+LOAD_KINDS = ("load_step", "ambient_step", "fan", "filament")
+
+
+@dataclass
+class PhaseMetrics:
+    zone: str
+    phase: str
+    kind: str  # step, tune, disturbance, ramp, hold
+    t_start_s: float
+    t_end_s: float
+    outcome: str
+    values: dict[str, float] = field(default_factory=dict)
+    info: dict[str, object] = field(default_factory=dict)
+
+
+def _window(tr: ZoneTrace, rec: PhaseRecord) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    t = np.asarray(tr.t)
+    mask = (t >= rec.t_start - 1e-9) & (t < rec.t_end - 1e-9)
+    return t[mask], np.asarray(tr.pv)[mask], np.asarray(tr.u)[mask], np.asarray(tr.setpoint)[mask]
+
+
+def zone_metrics(result: RunResult, tr: ZoneTrace) -> list[PhaseMetrics]:
+    out: list[PhaseMetrics] = []
+    last_step = math.nan
+    plant = result.scenario.build_plant()
+    for rec in tr.phases:
+        t, y, u, sp = _window(tr, rec)
+        pm = PhaseMetrics(
+            zone=tr.name,
+            phase=rec.name,
+            kind="hold",
+            t_start_s=rec.t_start,
+            t_end_s=rec.t_end,
+            outcome=rec.outcome,
+            info={"mode": rec.mode, "fuzzy": rec.fuzzy, "setpoint_c": rec.setpoint},
+        )
+        if t.size == 0:
+            out.append(pm)
+            continue
+        is_step = (
+            rec.ramp_c_per_min is None
+            and not math.isnan(rec.setpoint)
+            and (math.isnan(rec.setpoint_before) or rec.setpoint != rec.setpoint_before)
+        )
+        if rec.mode == "TUNE":
+            pm.kind = "tune"
+            if rec.outcome == "ok":
+                pm.values["tuning_duration_s"] = rec.t_end - rec.t_start
+            pm.values["tuning_pv_excursion_c"] = float(np.max(y) - np.min(y))
+            for key, val in rec.tuned.items():
+                pm.values[f"identified_{key}"] = val
+            if is_step:
+                last_step = abs(rec.setpoint - rec.pv_start)
+        elif is_step and abs(rec.setpoint - rec.pv_start) > 0.0:
+            pm.kind = "step"
+            w = StepWindow(t=t, y=y, t0=rec.t_start, y0=rec.pv_start, y_final=rec.setpoint)
+            pm.values.update(step_metrics(w))
+            last_step = abs(w.step)
+        elif rec.ramp_c_per_min is not None:
+            pm.kind = "ramp"
+            e = sp - y
+            pm.values.update(error_integrals(t, e, rec.t_start))
+            pm.values["max_tracking_error_c"] = float(np.max(np.abs(e)))
+        loads = [d for d in rec.disturbances if d[1] in LOAD_KINDS]
+        if loads:
+            pm.kind = "disturbance" if pm.kind == "hold" else pm.kind
+            t_dist = loads[0][0]
+            band = BAND_2PCT * last_step if not math.isnan(last_step) else math.nan
+            pm.values.update(disturbance_metrics(t, y, float(sp[-1]), t_dist, band))
+            pm.info["band_c"] = band
+            pm.info["disturbances"] = [{"t_s": d[0], "kind": d[1], "value": d[2]} for d in rec.disturbances]
+        elif rec.disturbances:
+            pm.info["disturbances"] = [{"t_s": d[0], "kind": d[1], "value": d[2]} for d in rec.disturbances]
+        pwm = (
+            np.asarray(tr.pwm)[(np.asarray(tr.t) >= rec.t_start) & (np.asarray(tr.t) < rec.t_end)]
+            if tr.pwm
+            else None
+        )
+        pm.values.update(effort_metrics(t, u, plant.u_min_pct, plant.u_max_pct, pwm))
+        out.append(pm)
+    return out
+
+
+def run_metrics(result: RunResult) -> list[PhaseMetrics]:
+    return [pm for tr in result.zones for pm in zone_metrics(result, tr)]

@@ -1,0 +1,372 @@
+"""The loop closer: plant <-> PLC over Modbus, one plant step at a time.
+
+Each plant step (dt = scenario.dt_s of controller time): every zone's phase sequencer writes what its
+programme asks (mode, setpoint or ramp point, fuzzy switch, manual value), the sensor measures the
+plant and the process value goes to the PLC (REAL tag, or raw ADC counts), the PLC scans
+(stepped: `scans_per_step` scans through the STEP register; real time: the PLC scans on its own
+clock and the harness keeps wall-clock pace dt/speed, recording the jitter), the outputs are read
+(analog output tag, or the PWM coils sampled every scan), and the plant integrates dt with them.
+Stepped mode is deterministic: same scenario, same seed -> same trace, bit for bit.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from .binding import ControllerCodes, ZoneBinding
+from .client import PlcClient, PlcError
+from .plants import Plant, PlantDisturbance, ZoneDisturbance
+from .regmap import RegisterMapError
+from .scenario import Phase, Scenario, Variant, Zone
+from .sensors import Sensor
+
+PERCENT = 100.0
+SECONDS_PER_MINUTE = 60.0
+
+
+@dataclass
+class PhaseRecord:
+    zone: str
+    name: str
+    t_start: float
+    t_end: float = math.nan
+    mode: str | None = None
+    fuzzy: bool | None = None
+    setpoint_before: float = math.nan
+    setpoint: float = math.nan
+    ramp_c_per_min: float | None = None
+    pv_start: float = math.nan
+    disturbances: list[tuple[float, str, float | str | None]] = field(default_factory=list)
+    outcome: str = "ok"
+    tuned: dict[str, float] = field(default_factory=dict)
+
+
+@dataclass
+class ZoneTrace:
+    name: str
+    plc_zone: int
+    t: list[float] = field(default_factory=list)
+    pv: list[float] = field(default_factory=list)  # what the PLC was given (after sensor chain)
+    true_c: list[float] = field(default_factory=list)  # plant temperature at the sensor
+    setpoint: list[float] = field(default_factory=list)
+    u: list[float] = field(default_factory=list)  # controller output applied to the plant, %
+    pwm: list[int] = field(default_factory=list)
+    state: list[int] = field(default_factory=list)
+    phase: list[str] = field(default_factory=list)
+    gains: dict[str, list[float]] = field(default_factory=dict)
+    phases: list[PhaseRecord] = field(default_factory=list)
+
+
+@dataclass
+class RunResult:
+    scenario: Scenario
+    variant: Variant
+    zones: list[ZoneTrace]
+    steps: int = 0
+    plant_time_s: float = 0.0
+    wall_s: float = 0.0
+    plant_cpu_s: float = 0.0
+    realtime: bool = False
+    jitter_ms: list[float] = field(default_factory=list)
+    error: str | None = None
+
+
+class ZoneSequencer:
+    """Runs one zone's phase programme; collects the register writes each step asks for."""
+
+    def __init__(
+        self,
+        zone: Zone,
+        binding: ZoneBinding,
+        codes: ControllerCodes,
+        variant: Variant,
+        disturbance: ZoneDisturbance,
+        plant_dist: PlantDisturbance,
+        sensor: Sensor,
+        trace: ZoneTrace,
+    ):
+        self.zone, self.binding, self.codes, self.variant = zone, binding, codes, variant
+        self.dist, self.plant_dist, self.sensor, self.trace = disturbance, plant_dist, sensor, trace
+        self.index = -1
+        self.phase_start = 0.0
+        self.setpoint = math.nan
+        self.ramp_target: float | None = None
+        self.ramp_rate_c_s = 0.0
+        self.pending: list = []
+        self.finished = False
+
+    @property
+    def phase(self) -> Phase:
+        return self.zone.phases[self.index]
+
+    def fuzzy_for(self, phase: Phase) -> bool | None:
+        if phase.fuzzy is None:
+            return None
+        return self.variant.fuzzy if self.variant.fuzzy is not None else phase.fuzzy
+
+    def _enter(self, t: float, pv: float, writes: dict) -> None:
+        self.index += 1
+        if self.index >= len(self.zone.phases):
+            self.finished = True
+            return
+        ph = self.phase
+        self.phase_start = t
+        rec = PhaseRecord(
+            zone=self.zone.name,
+            name=ph.name,
+            t_start=t,
+            mode=ph.mode,
+            fuzzy=self.fuzzy_for(ph),
+            setpoint_before=self.setpoint,
+            ramp_c_per_min=ph.ramp_c_per_min,
+            pv_start=pv,
+        )
+        if ph.mode is not None:
+            writes[self.binding["mode"]] = self.codes.modes[ph.mode]
+        fuzzy = self.fuzzy_for(ph)
+        if fuzzy is not None:
+            writes[self.binding["fuzzy"]] = bool(fuzzy)
+        if ph.manual_pct is not None:
+            writes[self.binding["manual"]] = ph.manual_pct
+        if ph.setpoint_c is not None:
+            if ph.ramp_c_per_min is not None and not math.isnan(self.setpoint):
+                self.ramp_target = ph.setpoint_c
+                self.ramp_rate_c_s = ph.ramp_c_per_min / SECONDS_PER_MINUTE
+            else:
+                self.ramp_target = None
+                self.setpoint = ph.setpoint_c
+                writes[self.binding["setpoint"]] = self.setpoint
+        rec.setpoint = ph.setpoint_c if ph.setpoint_c is not None else self.setpoint
+        self.pending = sorted(ph.disturbances, key=lambda d: d.at_s)
+        self.trace.phases.append(rec)
+
+    def start(self, t: float, pv: float, writes: dict) -> None:
+        self._enter(t, pv, writes)
+
+    def update(self, t: float, dt: float, pv: float, state: int | None, writes: dict) -> None:
+        """Called once per plant step before the PLC scans: phase changes, ramps, disturbances."""
+        if self.finished:
+            return
+        ph = self.phase
+        rec = self.trace.phases[-1]
+        elapsed = t - self.phase_start
+        done = False
+        if ph.until == "tuned" and state is not None:
+            if state == self.codes.states.get("TUNED"):
+                done = True
+            elif state == self.codes.states.get("ERROR"):
+                rec.outcome = "tuning error"
+                rec.t_end = t
+                self.finished = True
+                return
+            elif ph.timeout_s is not None and elapsed >= ph.timeout_s:
+                rec.outcome = "timeout"
+                rec.t_end = t
+                self.finished = True
+                return
+        elif ph.duration_s is not None and elapsed >= ph.duration_s - 1e-9:
+            done = True
+        if done:
+            rec.t_end = t
+            self._enter(t, pv, writes)
+            if self.finished:
+                return
+            elapsed = 0.0
+        while self.pending and self.pending[0].at_s <= elapsed + 1e-9:
+            d = self.pending.pop(0)
+            self._apply(d.kind, d.value)
+            self.trace.phases[-1].disturbances.append((t, d.kind, d.value))
+        if self.ramp_target is not None:
+            step = self.ramp_rate_c_s * dt
+            gap = self.ramp_target - self.setpoint
+            self.setpoint = self.ramp_target if abs(gap) <= step else self.setpoint + math.copysign(step, gap)
+            if self.setpoint == self.ramp_target:
+                self.ramp_target = None
+            writes[self.binding["setpoint"]] = self.setpoint
+
+    def _apply(self, kind: str, value: float | str | None) -> None:
+        if kind == "load_step":
+            self.dist.load_pct += float(value)  # type: ignore[arg-type]
+        elif kind == "ambient_step":
+            self.plant_dist.ambient_offset_c += float(value)  # type: ignore[arg-type]
+        elif kind == "fan":
+            self.dist.fan = float(value)  # type: ignore[arg-type]
+        elif kind == "filament":
+            self.dist.filament_mm_s = float(value)  # type: ignore[arg-type]
+        elif kind == "heater_fail":
+            self.dist.heater_failed = True
+        elif kind == "sensor_fault":
+            self.sensor.fault = str(value)
+
+
+def required_roles(scenario: Scenario, zone: Zone) -> list[str]:
+    roles = ["pv", "setpoint", "mode", "state"]
+    roles.append("pwm_heat" if scenario.output_path == "pwm" else "y")
+    if scenario.pv_path == "raw":
+        roles.append("pv_raw")
+    if any(p.fuzzy is not None for p in zone.phases) or any(v.fuzzy is not None for v in scenario.variants):
+        roles.append("fuzzy")
+    if any(p.manual_pct is not None for p in zone.phases):
+        roles.append("manual")
+    return roles
+
+
+def check_bindings(scenario: Scenario, bindings: dict[int, ZoneBinding], codes: ControllerCodes) -> None:
+    """Before anything starts: every register and mode the scenario needs exists (else one clear line)."""
+    for zone in scenario.zones:
+        if zone.plc_zone not in bindings:
+            raise RegisterMapError(
+                f"zone '{zone.name}': the application has no controller zone {zone.plc_zone}"
+            )
+        b = bindings[zone.plc_zone]
+        for role in required_roles(scenario, zone):
+            b[role]
+        for ph in zone.phases:
+            if ph.mode is not None and ph.mode not in codes.modes:
+                raise RegisterMapError(
+                    f"zone '{zone.name}', phase '{ph.name}': mode {ph.mode} is not a member "
+                    f"of E_CtrlMode ({', '.join(codes.modes)})"
+                )
+            if ph.until == "tuned" and "TUNED" not in codes.states:
+                raise RegisterMapError("E_CtrlState has no TUNED member: cannot wait for the end of tuning")
+
+
+ProgressFn = Callable[[float, float], None]
+
+
+async def close_loop(
+    scenario: Scenario,
+    variant: Variant,
+    client: PlcClient,
+    bindings: dict[int, ZoneBinding],
+    codes: ControllerCodes,
+    *,
+    realtime: bool = False,
+    speed: float = 1.0,
+    progress: ProgressFn | None = None,
+    max_plant_time_s: float | None = None,
+) -> RunResult:
+    """Run the scenario against one PLC. PLC errors end the run with `error` set; the trace so far is kept."""
+    check_bindings(scenario, bindings, codes)
+    plant: Plant = scenario.build_plant()
+    pdist = PlantDisturbance.for_channels(plant.channels)
+    traces = [ZoneTrace(name=z.name, plc_zone=z.plc_zone) for z in scenario.zones]
+    sensors = [z.sensor.build(seed=scenario.seed * 1000 + i) for i, z in enumerate(scenario.zones)]
+    seqs = [
+        ZoneSequencer(z, bindings[z.plc_zone], codes, variant, pdist.zones[z.channel], pdist, s, tr)
+        for z, s, tr in zip(scenario.zones, sensors, traces, strict=True)
+    ]
+    result = RunResult(scenario=scenario, variant=variant, zones=traces, realtime=realtime)
+    dt = scenario.dt_s
+    horizon = max_plant_time_s or scenario.nominal_duration_s
+    read_names: list[str] = []
+    for z in scenario.zones:
+        b = bindings[z.plc_zone]
+        read_names += [b["state"]]
+        read_names += (
+            [b["pwm_heat"]] + ([b["pwm_cool"]] if b.has("pwm_cool") else [])
+            if scenario.output_path == "pwm"
+            else [b["y"]]
+        )
+        read_names += [
+            b[r] for r in ("kp_eff", "tn_eff", "tv_eff", "kp", "tn", "tv", "ks", "tu", "tg") if b.has(r)
+        ]
+    u = [0.0] * plant.channels
+    states: list[int | None] = [None] * len(seqs)
+    wall0 = time.perf_counter()
+    plant_cpu = 0.0
+    k = 0
+    try:
+        writes: dict = {}
+        temps = plant.temperatures()
+        for z, s, seq in zip(scenario.zones, sensors, seqs, strict=True):
+            s.reset(temps[z.channel])
+            b = seq.binding
+            if scenario.pv_path == "raw" and b.has("pv_select"):
+                writes[b["pv_select"]] = True
+            elif b.has("pv_select"):
+                writes[b["pv_select"]] = False
+            seq.start(0.0, temps[z.channel], writes)
+        if writes:
+            await client.write_tags(writes)
+        while not all(seq.finished for seq in seqs):
+            t = k * dt
+            if t >= horizon + 1e-9:
+                break
+            writes = {}
+            temps = plant.temperatures()
+            measured = []
+            for i, (z, s, seq) in enumerate(zip(scenario.zones, sensors, seqs, strict=True)):
+                pv = s.measure(temps[z.channel], dt if k else 0.0)
+                measured.append(pv)
+                seq.update(t, dt, pv, states[i], writes)
+                b = seq.binding
+                if scenario.pv_path == "raw":
+                    writes[b["pv_raw"]] = s.last_counts
+                else:
+                    writes[b["pv"]] = pv
+            if all(seq.finished for seq in seqs):
+                break
+            if realtime:
+                target = wall0 + t / speed
+                delay = target - time.perf_counter()
+                if delay > 0:
+                    await asyncio.sleep(delay)
+                result.jitter_ms.append((time.perf_counter() - target) * 1e3)
+                await client.write_tags(writes)
+                values = await client.read_tags(read_names)
+            else:
+                await client.write_tags(writes)
+                values = await client.step_and_read(scenario.scans_per_step, read_names)
+            for i, (z, seq, tr) in enumerate(zip(scenario.zones, seqs, traces, strict=True)):
+                b = seq.binding
+                states[i] = int(values[b["state"]])
+                if scenario.output_path == "pwm":
+                    heat = bool(values[b["pwm_heat"]])
+                    cool = bool(values[b["pwm_cool"]]) if b.has("pwm_cool") else False
+                    u[z.channel] = PERCENT * (heat - cool)
+                    tr.pwm.append(int(heat) - int(cool))
+                else:
+                    u[z.channel] = float(values[b["y"]])
+                tr.t.append(t)
+                tr.pv.append(measured[i])
+                tr.true_c.append(temps[z.channel])
+                tr.setpoint.append(seq.setpoint)
+                tr.u.append(u[z.channel])
+                tr.state.append(states[i])
+                tr.phase.append(seq.phase.name if not seq.finished else "")
+                for role in ("kp_eff", "tn_eff", "tv_eff", "kp", "tn", "tv", "ks", "tu", "tg"):
+                    if b.has(role):
+                        tr.gains.setdefault(role, []).append(float(values[b[role]]))
+                if seq.trace.phases and not seq.finished:
+                    rec = seq.trace.phases[-1]
+                    for role in ("kp", "tn", "tv", "ks", "tu", "tg"):
+                        if b.has(role):
+                            rec.tuned[role] = float(values[b[role]])
+            c0 = time.perf_counter()
+            plant.step(u, dt, pdist)
+            plant_cpu += time.perf_counter() - c0
+            k += 1
+            if progress is not None and k % 50 == 0:
+                progress(t + dt, horizon)
+    except (PlcError, RegisterMapError) as exc:
+        result.error = str(exc)
+    finally:
+        end_t = k * dt
+        for tr in traces:
+            for rec in tr.phases:
+                if math.isnan(rec.t_end):
+                    rec.t_end = end_t
+                    if result.error and rec is tr.phases[-1]:
+                        rec.outcome = "aborted"
+        result.steps = k
+        result.plant_time_s = end_t
+        result.wall_s = time.perf_counter() - wall0
+        result.plant_cpu_s = plant_cpu
+        if progress is not None:
+            progress(min(end_t, horizon), horizon)
+    return result

@@ -1,0 +1,239 @@
+"""Reports of a scenario run: CSV trace, PNG plot, metrics.json, markdown + HTML summary.
+
+Layout under the output directory (default out/<scenario name>/):
+  trace_<variant>.csv    one row per plant step and zone
+  plot_<variant>.png     PV, setpoint, output and effective gains per zone (matplotlib, Agg backend)
+  metrics.json           {"scenario", "variants": [{"name", "error", "run", "phases": [...]}]}, one
+                         object per zone and phase; metric names carry their unit (metrics.py)
+  summary.md / .html     tables with the controller variants side by side
+"""
+
+from __future__ import annotations
+
+import csv
+import html
+import json
+import math
+import re
+from pathlib import Path
+
+from .analysis import PhaseMetrics
+from .loop import RunResult
+from .metrics import json_safe
+
+SUMMARY_KEYS = (
+    "tuning_duration_s",
+    "identified_ks",
+    "identified_tu",
+    "identified_tg",
+    "dead_time_s",
+    "rise_time_s",
+    "settling_time_2pct_s",
+    "settling_time_5pct_s",
+    "overshoot_pct",
+    "iae_c_s",
+    "ise_c2_s",
+    "itae_c_s2",
+    "ss_peak_to_peak_c",
+    "ss_std_c",
+    "max_deviation_c",
+    "recovery_time_2pct_s",
+    "max_tracking_error_c",
+    "tv_output_pct",
+    "pwm_switches_per_min",
+    "saturation_time_s",
+)
+
+
+def slug(text: str) -> str:
+    return re.sub(r"[^A-Za-z0-9]+", "_", text).strip("_").lower() or "run"
+
+
+def write_csv(result: RunResult, path: Path) -> None:
+    gain_roles = sorted({r for tr in result.zones for r in tr.gains})
+    with path.open("w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh)
+        w.writerow(
+            [
+                "t_s",
+                "zone",
+                "phase",
+                "pv_c",
+                "true_c",
+                "setpoint_c",
+                "output_pct",
+                "pwm",
+                "state",
+                *gain_roles,
+            ]
+        )
+        for tr in result.zones:
+            for i, t in enumerate(tr.t):
+                row = [
+                    f"{t:.3f}",
+                    tr.name,
+                    tr.phase[i],
+                    f"{tr.pv[i]:.4f}",
+                    f"{tr.true_c[i]:.4f}",
+                    f"{tr.setpoint[i]:.4f}",
+                    f"{tr.u[i]:.4f}",
+                    tr.pwm[i] if tr.pwm else "",
+                    tr.state[i],
+                ]
+                row += [f"{tr.gains[r][i]:.6g}" if r in tr.gains else "" for r in gain_roles]
+                w.writerow(row)
+
+
+def write_plot(result: RunResult, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    n = len(result.zones)
+    fig, axes = plt.subplots(3, n, figsize=(7 * n, 8), sharex="col", squeeze=False)
+    for j, tr in enumerate(result.zones):
+        ax_t, ax_u, ax_g = axes[0][j], axes[1][j], axes[2][j]
+        ax_t.plot(tr.t, tr.pv, label="PV (measured)", lw=1)
+        ax_t.plot(tr.t, tr.setpoint, label="setpoint", lw=1, ls="--")
+        for rec in tr.phases:
+            ax_t.axvline(rec.t_start, color="grey", lw=0.5)
+            ax_t.annotate(
+                rec.name,
+                (rec.t_start, 1.0),
+                xycoords=("data", "axes fraction"),
+                fontsize=7,
+                va="top",
+                rotation=90,
+            )
+        ax_t.set_ylabel("°C")
+        ax_t.set_title(f"{result.scenario.name} – {tr.name} – {result.variant.name}", fontsize=9)
+        ax_t.legend(fontsize=7)
+        ax_u.plot(tr.t, tr.u, lw=0.8, color="tab:red")
+        ax_u.set_ylabel("output %")
+        for role, values in sorted(tr.gains.items()):
+            if role in ("kp_eff", "kp", "tn_eff", "tn", "tv_eff", "tv"):
+                ax_g.plot(tr.t, values, lw=0.8, label=role)
+        ax_g.set_ylabel("gains (Kp %/°C, Tn/Tv s)")
+        ax_g.set_xlabel("t (s)")
+        if tr.gains:
+            ax_g.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+def _fmt(v: object) -> str:
+    if v is None:
+        return "–"
+    if isinstance(v, float):
+        if not math.isfinite(v):
+            return "–"
+        return f"{v:.3g}" if abs(v) < 1000 else f"{v:.0f}"
+    return str(v)
+
+
+def summary_rows(runs: list[tuple[RunResult, list[PhaseMetrics]]]) -> tuple[list[str], list[list[str]]]:
+    """Rows: (zone, phase, metric); columns: one per variant."""
+    header = ["zone", "phase", "metric"] + [r.variant.name for r, _ in runs]
+    keys: list[tuple[str, str, str]] = []
+    for _, pms in runs:
+        for pm in pms:
+            for k in SUMMARY_KEYS:
+                if k in pm.values and (pm.zone, pm.phase, k) not in keys:
+                    keys.append((pm.zone, pm.phase, k))
+    rows = []
+    for zone, phase, k in keys:
+        row = [zone, phase, k]
+        for _, pms in runs:
+            hit = next((pm for pm in pms if pm.zone == zone and pm.phase == phase), None)
+            row.append(_fmt(hit.values.get(k)) if hit is not None else "–")
+        rows.append(row)
+    return header, rows
+
+
+def text_table(header: list[str], rows: list[list[str]]) -> str:
+    widths = [max(len(h), *(len(r[i]) for r in rows)) if rows else len(h) for i, h in enumerate(header)]
+    line = "  ".join(h.ljust(w) for h, w in zip(header, widths, strict=True))
+    out = [line, "  ".join("-" * w for w in widths)]
+    out += ["  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)) for r in rows]
+    return "\n".join(out)
+
+
+def write_reports(runs: list[tuple[RunResult, list[PhaseMetrics]]], out_dir: Path) -> dict[str, Path]:
+    out_dir.mkdir(parents=True, exist_ok=True)
+    written: dict[str, Path] = {}
+    scenario = runs[0][0].scenario
+    doc = {
+        "scenario": scenario.name,
+        "file": str(scenario.path),
+        "description": scenario.description,
+        "reference": scenario.reference,
+        "variants": [],
+    }
+    for result, pms in runs:
+        tag = slug(result.variant.name)
+        csv_path, png_path = out_dir / f"trace_{tag}.csv", out_dir / f"plot_{tag}.png"
+        write_csv(result, csv_path)
+        write_plot(result, png_path)
+        written[f"csv:{tag}"], written[f"png:{tag}"] = csv_path, png_path
+        doc["variants"].append(
+            {
+                "name": result.variant.name,
+                "error": result.error,
+                "run": json_safe(
+                    {
+                        "steps": float(result.steps),
+                        "plant_time_s": result.plant_time_s,
+                        "wall_s": result.wall_s,
+                        "speedup_x": result.plant_time_s / result.wall_s if result.wall_s > 0 else math.nan,
+                    }
+                ),
+                "phases": [
+                    {
+                        "zone": pm.zone,
+                        "phase": pm.phase,
+                        "kind": pm.kind,
+                        "t_start_s": pm.t_start_s,
+                        "t_end_s": pm.t_end_s,
+                        "outcome": pm.outcome,
+                        "info": pm.info,
+                        "metrics": json_safe(pm.values),
+                    }
+                    for pm in pms
+                ],
+            }
+        )
+    metrics_path = out_dir / "metrics.json"
+    metrics_path.write_text(json.dumps(doc, indent=2, default=str) + "\n", encoding="utf-8")
+    written["metrics"] = metrics_path
+    header, rows = summary_rows(runs)
+    md = [f"# {scenario.name}", "", scenario.description, ""]
+    if scenario.reference:
+        md += [f"Reference: {scenario.reference}", ""]
+    for result, _ in runs:
+        status = f"error: {result.error}" if result.error else "completed"
+        md.append(
+            f"- **{result.variant.name}**: {status}; {result.plant_time_s:.0f} s of plant time in "
+            f"{result.wall_s:.2f} s wall ({result.steps} steps)"
+        )
+    md += ["", "| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    md += ["| " + " | ".join(r) + " |" for r in rows]
+    md += ["", *[f"![{r.variant.name}](plot_{slug(r.variant.name)}.png)" for r, _ in runs], ""]
+    (out_dir / "summary.md").write_text("\n".join(md), encoding="utf-8")
+    written["summary_md"] = out_dir / "summary.md"
+    cells = "".join(f"<th>{html.escape(h)}</th>" for h in header)
+    body = "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in r) + "</tr>" for r in rows)
+    imgs = "".join(
+        f'<p><img src="plot_{slug(r.variant.name)}.png" alt="{html.escape(r.variant.name)}"></p>'
+        for r, _ in runs
+    )
+    page = (
+        f"<!doctype html><html><head><meta charset='utf-8'><title>{html.escape(scenario.name)}</title>"
+        "<style>table{border-collapse:collapse}td,th{border:1px solid #999;padding:2px 6px}</style>"
+        f"</head><body><h1>{html.escape(scenario.name)}</h1><p>{html.escape(scenario.description)}</p>"
+        f"<table><tr>{cells}</tr>{body}</table>{imgs}</body></html>\n"
+    )
+    (out_dir / "summary.html").write_text(page, encoding="utf-8")
+    written["summary_html"] = out_dir / "summary.html"
+    return written

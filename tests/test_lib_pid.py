@@ -1,0 +1,175 @@
+"""FB_CtrlPid against hand-computed sequences (docs/library.md, "PID")."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import pytest
+
+from tests.st_helpers import ScanDriver, build_program, load_test_app
+
+TS = 0.1
+REL = 1e-4
+
+
+@dataclass
+class RefPid:
+    """Independent Python model of the documented equations."""
+
+    kp: float
+    tn: float
+    tv: float
+    td: float
+    ymin: float = -100.0
+    ymax: float = 100.0
+    ts: float = TS
+    i: float = 0.0
+    d: float = 0.0
+    x_prev: float | None = None
+    kp_prev: float | None = None
+
+    def step(self, w: float, x: float) -> float:
+        e = w - x
+        if self.x_prev is None:
+            self.x_prev, self.kp_prev = x, self.kp
+        if self.kp != self.kp_prev:
+            self.i -= (self.kp - self.kp_prev) * e
+        p = self.kp * e
+        d = 0.0
+        if self.tv > 0:
+            den = self.td + self.ts
+            d = self.td / den * self.d - self.kp * self.tv / den * (x - self.x_prev)
+        di = self.kp * self.ts / self.tn * e if self.tn > 0 else 0.0
+        i_new = self.i + di
+        if di > 0:
+            i_new = min(i_new, max(self.i, self.ymax - p - d))
+        elif di < 0:
+            i_new = max(i_new, min(self.i, self.ymin - p - d))
+        self.i, self.d, self.x_prev, self.kp_prev = i_new, d, x, self.kp
+        return min(max(p + i_new + d, self.ymin), self.ymax)
+
+
+@pytest.fixture(scope="module")
+def pid() -> ScanDriver:
+    prog = build_program("    fbPid : FB_CtrlPid;", "  fbPid();")
+    return ScanDriver(load_test_app(prog))
+
+
+def configure(drv: ScanDriver, kp: float, tn: float, tv: float, td: float,
+              ymin: float = -100.0, ymax: float = 100.0, ipart_only: bool = False) -> None:
+    for name, value in (("fKp", kp), ("fTn", tn), ("fTv", tv), ("fTd", td), ("fYMin", ymin),
+                        ("fYMax", ymax), ("fCycleTime", TS)):
+        drv.set(f"fbPid.{name}", value)
+    drv.set("fbPid.bARWOnIPartOnly", ipart_only)
+    drv.set("fbPid.bSync", False)
+    drv.set("fbPid.bHold", False)
+    drv.set("fbPid.bReset", True)
+    drv.scan()
+    drv.set("fbPid.bReset", False)
+
+
+def run(drv: ScanDriver, w: float, xs: list[float]) -> list[float]:
+    out = []
+    drv.set("fbPid.fW", w)
+    for x in xs:
+        drv.set("fbPid.fX", x)
+        drv.scan()
+        out.append(drv.get("fbPid.fY"))
+    return out
+
+
+def test_p_step_is_kp_times_error(pid: ScanDriver) -> None:
+    configure(pid, kp=4.0, tn=0.0, tv=0.0, td=0.0)
+    ys = run(pid, 30.0, [20.0, 25.0, 28.5])
+    assert ys == pytest.approx([40.0, 20.0, 6.0], rel=REL)
+
+
+def test_integral_ramp_by_kp_ts_over_tn(pid: ScanDriver) -> None:
+    configure(pid, kp=2.0, tn=10.0, tv=0.0, td=0.0)
+    ys = run(pid, 21.0, [20.0] * 5)
+    # P = 2, I grows by Kp*Ts/Tn*e = 0.02 per cycle, starting with the first cycle
+    assert ys == pytest.approx([2.02, 2.04, 2.06, 2.08, 2.10], rel=REL)
+
+
+def test_filtered_derivative_on_measurement(pid: ScanDriver) -> None:
+    kp, tv, td = 2.0, 5.0, 1.0
+    configure(pid, kp=kp, tn=0.0, tv=tv, td=td)
+    xs = [20.0, 20.0, 21.0, 22.0, 22.0, 22.0]
+    ys = run(pid, 20.0, xs)
+    ref = RefPid(kp, 0.0, tv, td)
+    expected = [ref.step(20.0, x) for x in xs]
+    assert ys == pytest.approx(expected, rel=REL, abs=1e-5)
+    # hand values: D-T1 backward Euler, a = Td/(Td+Ts) = 1/1.1, gain Kp*Tv/(Td+Ts) = 10/1.1
+    d3 = -10.0 / 1.1 * 1.0
+    assert ys[2] == pytest.approx(kp * (20.0 - 21.0) + d3, rel=REL)
+    assert ys[4] == pytest.approx(kp * (20.0 - 22.0) + (1 / 1.1) * ((1 / 1.1) * d3 - 10.0 / 1.1), rel=REL)
+
+
+def test_no_derivative_kick_on_setpoint_step(pid: ScanDriver) -> None:
+    configure(pid, kp=1.0, tn=0.0, tv=10.0, td=1.0)
+    run(pid, 20.0, [20.0, 20.0])
+    ys = run(pid, 30.0, [20.0])
+    assert ys[0] == pytest.approx(10.0, rel=REL)  # only P: no D on the setpoint
+
+
+def test_anti_windup_stops_integrator_at_limit(pid: ScanDriver) -> None:
+    configure(pid, kp=5.0, tn=1.0, tv=0.0, td=0.0, ymin=0.0, ymax=100.0)
+    ys = run(pid, 100.0, [70.0] * 50)  # P = 150: saturated at once
+    assert max(ys) == pytest.approx(100.0)
+    assert pid.get("fbPid.bARWActive") is True
+    i_sat = pid.get("fbPid.fI")
+    assert i_sat <= 1e-6  # the integrator did not wind up while P alone saturates the output
+    # error reverses: output leaves the limit immediately (no windup to unwind)
+    ys = run(pid, 100.0, [99.0, 101.0])
+    assert ys[-1] < 5.0
+    ref_unclamped_i = 50 * 5.0 * TS / 1.0 * 30.0
+    assert ref_unclamped_i > 100.0  # a plain integrator would have wound up far beyond the limit
+
+
+def test_anti_windup_ipart_only_clamps_i_to_limits(pid: ScanDriver) -> None:
+    configure(pid, kp=1.0, tn=1.0, tv=0.0, td=0.0, ymin=0.0, ymax=50.0, ipart_only=True)
+    run(pid, 100.0, [90.0] * 200)
+    assert pid.get("fbPid.fI") == pytest.approx(50.0, rel=REL)
+    assert pid.get("fbPid.fY") == pytest.approx(50.0, rel=REL)
+
+
+def test_reference_sequence_matches_with_limits(pid: ScanDriver) -> None:
+    kp, tn, tv, td = 3.0, 8.0, 2.0, 0.5
+    configure(pid, kp=kp, tn=tn, tv=tv, td=td, ymin=-20.0, ymax=60.0)
+    ref = RefPid(kp, tn, tv, td, ymin=-20.0, ymax=60.0)
+    xs = [20.0 + 0.3 * k for k in range(60)] + [38.0 - 0.5 * k for k in range(60)]
+    ys = run(pid, 30.0, xs)
+    expected = [ref.step(30.0, x) for x in xs]
+    assert ys == pytest.approx(expected, rel=1e-3, abs=1e-3)
+
+
+def test_gain_change_does_not_jump_output(pid: ScanDriver) -> None:
+    configure(pid, kp=2.0, tn=20.0, tv=0.0, td=0.0)
+    ys = run(pid, 50.0, [40.0] * 10)
+    step_per_cycle = ys[-1] - ys[-2]
+    pid.set("fbPid.fKp", 6.0)  # P alone would jump by 4 * 10 = 40 %
+    y_after = run(pid, 50.0, [40.0])[0]
+    # the only change is the integral step, now with the new gain: 6 * 0.1 / 20 * 10 = 0.3
+    assert y_after - ys[-1] == pytest.approx(0.3, rel=1e-3)
+    assert abs(y_after - ys[-1]) < 40.0 * 0.05
+    assert step_per_cycle == pytest.approx(0.1, rel=1e-3)
+
+
+def test_integral_off_when_tn_not_positive(pid: ScanDriver) -> None:
+    configure(pid, kp=1.0, tn=-5.0, tv=0.0, td=0.0)
+    ys = run(pid, 30.0, [20.0] * 5)
+    assert ys == pytest.approx([10.0] * 5, rel=REL)
+
+
+def test_sync_presets_output_and_hold_freezes(pid: ScanDriver) -> None:
+    configure(pid, kp=2.0, tn=10.0, tv=0.0, td=0.0)
+    pid.set("fbPid.bSync", True)
+    pid.set("fbPid.fSyncValue", 42.0)
+    ys = run(pid, 30.0, [20.0])
+    assert ys[0] == pytest.approx(42.0)
+    pid.set("fbPid.bSync", False)
+    ys = run(pid, 30.0, [20.0])
+    assert ys[0] == pytest.approx(42.0 + 2.0 * 0.1 / 10.0 * 10.0, rel=REL)  # continues from 42 % bumplessly
+    pid.set("fbPid.bHold", True)
+    ys = run(pid, 30.0, [10.0, 0.0])
+    assert ys == pytest.approx([ys[0], ys[0]]) and ys[0] == pytest.approx(42.2, rel=REL)

@@ -1,0 +1,270 @@
+"""Self-tuning (TUNE) of FB_TempController on simulated plants: identification, rules, error paths."""
+
+from __future__ import annotations
+
+import math
+import random
+from collections import deque
+from dataclasses import dataclass, field
+
+import pytest
+
+from tests.st_helpers import ScanDriver, build_program, load_test_app
+
+TS = 0.2  # control and task cycle of these tests, s
+MODE_ACTIVE, MODE_TUNE = 2, 5
+STATE_ACTIVE, STATE_TUNING, STATE_TUNED, STATE_ERROR = 2, 5, 6, 8
+TUNE_READY, TUNE_ERROR = 4, 5
+RULE_AUTO, RULE_CHR, RULE_COHEN_COON, RULE_SIMC = 0, 1, 2, 3
+
+PROGRAM = build_program(
+    """    sPar : ST_ControllerParameter;
+    fbUut : FB_TempController;
+    nMode : INT;
+    nRule : INT;
+    nState : INT;
+    nTuneState : INT;
+    nRuleUsed : INT;""",
+    """  fbUut.eCtrlMode := FC_CtrlModeFromInt(nMode := nMode, eLastValid := fbUut.eCtrlMode);
+  sPar.eTuneRule := FC_TuneRuleFromInt(nRule := nRule, eLastValid := sPar.eTuneRule);
+  fbUut(sParam := sPar);
+  nState := FC_CtrlStateToInt(eState := fbUut.eCtrlState);
+  nTuneState := FC_CtrlTuneStateToInt(eTuneState := fbUut.eTuneState);
+  nRuleUsed := FC_TuneRuleToInt(eRule := sPar.eTuneRuleUsed);""",
+)
+
+
+@dataclass
+class Fopdt:
+    """K e^(-Ls) / (1 + Ts) with zero-order hold, exact discretisation, plus optional noise."""
+
+    k: float
+    t: float
+    l: float
+    x0: float = 20.0
+    noise: float = 0.0
+    dt: float = TS
+    x: float = 0.0
+    line: deque = field(default_factory=deque)
+    rng: random.Random = field(default_factory=lambda: random.Random(7))
+
+    def __post_init__(self) -> None:
+        self.x = self.x0
+        self.line = deque([0.0] * round(self.l / self.dt))
+
+    def measure(self) -> float:
+        return self.x + (self.rng.uniform(-self.noise, self.noise) if self.noise else 0.0)
+
+    def step(self, u: float) -> None:
+        self.line.append(u)
+        u_delayed = self.line.popleft()
+        if self.t > 0:
+            a = math.exp(-self.dt / self.t)
+            self.x = a * self.x + (1 - a) * (self.x0 + self.k * u_delayed)
+        else:
+            self.x = self.x0 + self.k * u_delayed
+
+
+@dataclass
+class DoubleIntegrator:
+    """x'' = g * u: the slope keeps growing while the step is applied (no inflection)."""
+
+    g: float
+    x0: float = 20.0
+    x: float = 20.0
+    v: float = 0.0
+
+    def measure(self) -> float:
+        return self.x
+
+    def step(self, u: float) -> None:
+        self.x += self.v * TS + 0.5 * self.g * u * TS * TS
+        self.v += self.g * u * TS
+
+
+@dataclass
+class Ramp:
+    """X drifts at a constant rate whatever the output: never steady."""
+
+    rate: float
+    x: float = 20.0
+
+    def measure(self) -> float:
+        return self.x
+
+    def step(self, u: float) -> None:
+        self.x += self.rate * TS
+
+
+@pytest.fixture()
+def uut() -> ScanDriver:
+    drv = ScanDriver(load_test_app(PROGRAM))
+    for name, value in (("fTaskCycleTime", TS), ("fCtrlCycleTime", TS), ("fYMin", 0.0), ("fYMax", 100.0),
+                        ("fWMax", 1000.0), ("fXMax", 2000.0), ("fTempAbsHigh", 2000.0),
+                        ("fWatchPeriod", 0.0), ("fRunawayPeriod", 0.0), ("fTuneTimeout", 5000.0)):
+        drv.set(f"sPar.{name}", value)
+    return drv
+
+
+def run_tune(drv: ScanDriver, plant, w: float, y_tune: float = 100.0, rule: int = RULE_AUTO,
+             max_seconds: float = 3000.0, extra: dict | None = None) -> None:
+    drv.set("sPar.fYTune", y_tune)
+    drv.set("nRule", rule)
+    for name, value in (extra or {}).items():
+        drv.set(f"sPar.{name}", value)
+    drv.set("fbUut.fW1", w)
+    drv.set("nMode", MODE_TUNE)
+    for _ in range(int(max_seconds / TS)):
+        drv.set("fbUut.fX", plant.measure())
+        drv.scan()
+        plant.step(drv.get("fbUut.fY"))
+        if drv.get("nTuneState") in (TUNE_READY, TUNE_ERROR):
+            return
+
+
+def rule_values(rule: int, ks: float, tu: float, tg: float, vmax: float, dy: float,
+                coef=(1.2, 2.0, 0.42, 0.25), tauc_factor: float = 1.0) -> tuple[float, float, float, float]:
+    """docs/library.md formulas, written independently of the ST."""
+    c_kp, c_tn, c_tv, c_td = coef
+    if rule == RULE_CHR:
+        a = vmax * tu / dy
+        tv = c_tv * tu
+        return c_kp / a, c_tn * tu, tv, c_td * tv
+    if rule == RULE_COHEN_COON:
+        r = tu / tg
+        tv = 4 * tu / (11 + 2 * r)
+        return (1 / ks) * (1 / r) * (4 / 3 + r / 4), tu * (32 + 6 * r) / (13 + 8 * r), tv, c_td * tv
+    tauc = tauc_factor * tu
+    return tg / (ks * (tauc + tu)), min(tg + tu / 3, 4 * (tauc + tu)), 0.0, 0.0
+
+
+def identified(drv: ScanDriver) -> dict[str, float]:
+    names = ("fKs", "fTu", "fTg", "fVmax", "fKp", "fTn", "fTv", "fTd", "fTauNorm")
+    return {n: drv.get(f"sPar.{n}") for n in names}
+
+
+@pytest.mark.parametrize(
+    ("k", "t", "l", "w", "dy", "expected_rule"),
+    [
+        (0.9, 100.0, 10.0, 80.0, 100.0, RULE_SIMC),        # lag dominated (hot end / bed like), tau = 0.09
+        (2.0, 23.4, 10.6, 100.0, 50.0, RULE_COHEN_COON),   # seed 003 nozzle T and L, tau = 0.31
+        (1.0, 20.0, 30.0, 70.0, 100.0, RULE_SIMC),         # delay dominated, tau = 0.6
+    ],
+)
+def test_fopdt_identified_within_10_percent_and_auto_rule(uut, k, t, l, w, dy, expected_rule) -> None:
+    plant = Fopdt(k=k, t=t, l=l)
+    run_tune(uut, plant, w=w, y_tune=dy)
+    assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
+    assert uut.get("nState") == STATE_TUNED
+    got = identified(uut)
+    assert got["fKs"] == pytest.approx(k, rel=0.10)
+    assert got["fTu"] == pytest.approx(l, rel=0.10)
+    assert got["fTg"] == pytest.approx(t, rel=0.10)
+    assert got["fTauNorm"] == pytest.approx(got["fTu"] / (got["fTu"] + got["fTg"]), rel=1e-4)
+    assert uut.get("nRuleUsed") == expected_rule
+    want = rule_values(expected_rule, got["fKs"], got["fTu"], got["fTg"], got["fVmax"], dy)
+    assert [got["fKp"], got["fTn"], got["fTv"], got["fTd"]] == pytest.approx(want, rel=1e-3, abs=1e-6)
+
+
+@pytest.mark.parametrize("rule", [RULE_CHR, RULE_COHEN_COON, RULE_SIMC])
+def test_selected_rule_produces_documented_values(uut, rule) -> None:
+    plant = Fopdt(k=1.5, t=60.0, l=12.0)
+    run_tune(uut, plant, w=120.0, y_tune=80.0, rule=rule)
+    assert uut.get("nTuneState") == TUNE_READY
+    assert uut.get("nRuleUsed") == rule
+    got = identified(uut)
+    want = rule_values(rule, got["fKs"], got["fTu"], got["fTg"], got["fVmax"], 80.0)
+    assert [got["fKp"], got["fTn"], got["fTv"], got["fTd"]] == pytest.approx(want, rel=1e-3, abs=1e-6)
+    if rule == RULE_CHR:
+        # CHR through the tangent equals 1.2 Tg / (Ks Tu) of the true plant within the identification error
+        assert got["fKp"] == pytest.approx(1.2 * 60.0 / (1.5 * 12.0), rel=0.10)
+
+
+def test_linear_response_falls_back_to_chr_without_tg(uut) -> None:
+    # setpoint reached while the response is still a straight line: Tg and Ks not identifiable
+    plant = Fopdt(k=5.0, t=2000.0, l=8.0)
+    run_tune(uut, plant, w=45.0, y_tune=100.0, rule=RULE_SIMC)
+    assert uut.get("nTuneState") == TUNE_READY
+    got = identified(uut)
+    assert got["fTg"] == 0.0 and got["fKs"] == 0.0
+    assert uut.get("nRuleUsed") == RULE_CHR
+    assert got["fTu"] == pytest.approx(8.0, rel=0.10)
+    assert got["fVmax"] == pytest.approx(5.0 * 100.0 / 2000.0, rel=0.05)
+
+
+def test_tuned_then_active_is_bumpless_and_controls(uut) -> None:
+    plant = Fopdt(k=0.9, t=100.0, l=10.0)
+    run_tune(uut, plant, w=80.0)
+    assert uut.get("nState") == STATE_TUNED
+    y_before = uut.get("fbUut.fY")
+    uut.set("nMode", MODE_ACTIVE)
+    uut.set("fbUut.fX", plant.measure())
+    uut.scan()
+    assert uut.get("nState") == STATE_ACTIVE
+    assert abs(uut.get("fbUut.fY") - y_before) < 2.0
+    for _ in range(int(1500 / TS)):
+        uut.set("fbUut.fX", plant.measure())
+        uut.scan()
+        plant.step(uut.get("fbUut.fY"))
+    assert plant.x == pytest.approx(80.0, abs=0.5)
+
+
+def error_of(drv: ScanDriver) -> int:
+    assert drv.get("nTuneState") == TUNE_ERROR
+    assert drv.get("nState") == STATE_ERROR
+    assert drv.get("fbUut.bError") is True
+    assert drv.get("fbUut.dwAlarm") & 0x20000
+    return drv.get("fbUut.nErrorId")
+
+
+def test_error_not_steady(uut) -> None:
+    run_tune(uut, Ramp(rate=0.2), w=500.0)
+    assert error_of(uut) == 10
+
+
+def test_error_step_too_small_for_noise(uut) -> None:
+    plant = Fopdt(k=0.5, t=50.0, l=5.0, noise=0.45)
+    run_tune(uut, plant, w=26.0, y_tune=100.0)
+    assert error_of(uut) == 11
+
+
+def test_error_no_inflection(uut) -> None:
+    run_tune(uut, DoubleIntegrator(g=0.0005), w=60.0)
+    assert error_of(uut) == 12
+
+
+def test_error_timeout(uut) -> None:
+    run_tune(uut, Fopdt(k=0.9, t=300.0, l=10.0), w=100.0, extra={"fTuneTimeout": 60.0})
+    assert error_of(uut) == 13
+
+
+def test_error_output_saturated(uut) -> None:
+    run_tune(uut, Fopdt(k=1.0, t=50.0, l=5.0), w=80.0, y_tune=80.0, extra={"fYStable": 30.0})
+    assert error_of(uut) == 14
+
+
+def test_error_setpoint_on_wrong_side(uut) -> None:
+    run_tune(uut, Fopdt(k=1.0, t=50.0, l=5.0), w=10.0)
+    assert error_of(uut) == 15
+
+
+def test_error_no_valid_tu_without_delay(uut) -> None:
+    run_tune(uut, Fopdt(k=1.0, t=50.0, l=0.0), w=80.0)
+    assert error_of(uut) == 16
+
+
+def test_leaving_tune_aborts_and_keeps_parameters(uut) -> None:
+    plant = Fopdt(k=0.9, t=100.0, l=10.0)
+    kp_before = uut.get("sPar.fKp")
+    uut.set("fbUut.fW1", 80.0)
+    uut.set("nMode", MODE_TUNE)
+    for _ in range(int(60 / TS)):
+        uut.set("fbUut.fX", plant.measure())
+        uut.scan()
+        plant.step(uut.get("fbUut.fY"))
+    assert uut.get("nState") == STATE_TUNING
+    uut.set("nMode", 1)
+    uut.scan()
+    assert uut.get("nTuneState") == 0
+    assert uut.get("fbUut.fY") == 0.0
+    assert uut.get("sPar.fKp") == kp_before

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from .binding import ControllerCodes, ZoneBinding
 from .client import PlcClient, PlcError
 from .plants import Plant, PlantDisturbance, ZoneDisturbance
-from .regmap import RegisterMapError
+from .regmap import RegisterMap, RegisterMapError
 from .scenario import Phase, Scenario, Variant, Zone
 from .sensors import Sensor
 
@@ -125,6 +125,7 @@ class ZoneSequencer:
             ramp_c_per_min=ph.ramp_c_per_min,
             pv_start=pv,
         )
+        writes.update(ph.writes)
         if ph.mode is not None:
             writes[self.binding["mode"]] = self.codes.modes[ph.mode]
         fuzzy = self.fuzzy_for(ph)
@@ -215,7 +216,9 @@ def required_roles(scenario: Scenario, zone: Zone) -> list[str]:
     return roles
 
 
-def check_bindings(scenario: Scenario, bindings: dict[int, ZoneBinding], codes: ControllerCodes) -> None:
+def check_bindings(
+    scenario: Scenario, bindings: dict[int, ZoneBinding], codes: ControllerCodes, regmap: RegisterMap
+) -> None:
     """Before anything starts: every register and mode the scenario needs exists (else one clear line)."""
     for zone in scenario.zones:
         if zone.plc_zone not in bindings:
@@ -226,6 +229,10 @@ def check_bindings(scenario: Scenario, bindings: dict[int, ZoneBinding], codes: 
         for role in required_roles(scenario, zone):
             b[role]
         for ph in zone.phases:
+            for tag in ph.writes:
+                client_tag = regmap[tag]  # raises "tag ... is not in the register map"
+                if not client_tag.writable:
+                    raise RegisterMapError(f"zone '{zone.name}', phase '{ph.name}': {tag} is read-only")
             if ph.mode is not None and ph.mode not in codes.modes:
                 raise RegisterMapError(
                     f"zone '{zone.name}', phase '{ph.name}': mode {ph.mode} is not a member "
@@ -251,7 +258,7 @@ async def close_loop(
     max_plant_time_s: float | None = None,
 ) -> RunResult:
     """Run the scenario against one PLC. PLC errors end the run with `error` set; the trace so far is kept."""
-    check_bindings(scenario, bindings, codes)
+    check_bindings(scenario, bindings, codes, client.regmap)
     plant: Plant = scenario.build_plant()
     pdist = PlantDisturbance.for_channels(plant.channels)
     traces = [ZoneTrace(name=z.name, plc_zone=z.plc_zone) for z in scenario.zones]

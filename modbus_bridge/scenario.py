@@ -60,6 +60,7 @@ class Phase:
     until: str | None = None
     timeout_s: float | None = None
     disturbances: list[Disturbance] = field(default_factory=list)
+    writes: dict[str, float | int | bool] = field(default_factory=dict)
 
 
 @dataclass
@@ -291,6 +292,14 @@ def _phase(tab: _Table) -> Phase:
     if ph.ramp_c_per_min is not None and ph.setpoint_c is None:
         tab.fail("ramp_c_per_min", "a ramp needs setpoint_c (the ramp's target)")
     ph.disturbances = [_disturbance(d, ph.duration_s) for d in tab.array("disturbance")]
+    wtab = tab.sub("write")
+    for tag, value in wtab.data.items():
+        if not isinstance(value, bool | int | float) or (
+            isinstance(value, float) and not math.isfinite(value)
+        ):
+            wtab.fail(tag, f"must be a finite number or a boolean, got {value!r}")
+        ph.writes[tag] = value
+        wtab.used.add(tag)
     tab.done()
     return ph
 

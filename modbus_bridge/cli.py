@@ -1,0 +1,107 @@
+"""Handlers of the harness sub-commands (see commands.py)."""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import sys
+import time
+from pathlib import Path
+
+from plc.cli import UserError
+
+from .regmap import RegisterMapError, load_register_map, markdown
+from .scenario import ScenarioError, load_scenario, resolve_scenario, shipped_scenarios
+
+OUT_DIR = Path("out")
+
+
+def main_scenarios(args: argparse.Namespace) -> int:
+    for path in shipped_scenarios():
+        try:
+            sc = load_scenario(path)
+        except ScenarioError as exc:
+            print(f"{path.stem:34s} INVALID: {exc}")
+            continue
+        print(f"{path.stem:34s} {sc.description}")
+    return 0
+
+
+def main_regmap(args: argparse.Namespace) -> int:
+    try:
+        regmap = load_register_map()
+    except RegisterMapError as exc:
+        raise UserError(str(exc)) from None
+    if args.markdown:
+        text = markdown(regmap)
+    else:
+        lines = [
+            f"{t.address:5d} {t.table:17s} {t.location:8s} {t.iec_type:6s} {t.name:28s} {t.comment}"
+            for t in sorted(regmap.tags.values(), key=lambda t: (t.table, t.address))
+        ]
+        text = "\n".join(lines) + "\n"
+    if args.output:
+        Path(args.output).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.output).write_text(text, encoding="utf-8")
+    else:
+        sys.stdout.write(text)
+    return 0
+
+
+def main_run(args: argparse.Namespace) -> int:
+    from .loop import check_bindings
+    from .report import slug, summary_rows, text_table, write_reports
+    from .runner import HarnessSetup, ProgressBar, parse_host_port, run_variants
+
+    t_start = time.perf_counter()
+    try:
+        scenario = load_scenario(resolve_scenario(args.scenario))
+    except ScenarioError as exc:
+        raise UserError(str(exc)) from None
+    if args.speed <= 0:
+        raise UserError(f"--speed must be > 0, got {args.speed}")
+    if args.plc:
+        try:
+            parse_host_port(args.plc)
+        except ValueError as exc:
+            raise UserError(str(exc)) from None
+    try:
+        setup = HarnessSetup.default()
+        check_bindings(scenario, setup.bindings(scenario), setup.codes, setup.regmap)
+    except RegisterMapError as exc:
+        raise UserError(str(exc)) from None
+    bar = ProgressBar(scenario.name)
+    bar.enabled = not args.quiet
+    try:
+        runs = asyncio.run(
+            run_variants(
+                scenario, setup, plc=args.plc, realtime=args.realtime, speed=args.speed, progress=bar
+            )
+        )
+    except RegisterMapError as exc:
+        raise UserError(str(exc)) from None
+    finally:
+        bar.close()
+    out_dir = Path(args.out) if args.out else OUT_DIR / slug(scenario.name)
+    written = write_reports(runs, out_dir)
+    header, rows = summary_rows(runs)
+    print(text_table(header, rows))
+    for result, _ in runs:
+        mode = "real time" if result.realtime else "stepped"
+        line = (
+            f"{result.variant.name}: {result.plant_time_s:.0f} s plant time, {result.steps} steps, "
+            f"{result.wall_s:.2f} s wall ({mode}, {result.plant_time_s / max(result.wall_s, 1e-9):.0f}x)"
+        )
+        if result.jitter_ms:
+            jit = sorted(abs(j) for j in result.jitter_ms)
+            line += f", jitter median {jit[len(jit) // 2]:.2f} ms, max {jit[-1]:.2f} ms"
+        print(line)
+    print(
+        f"report: {written['summary_md']} (metrics.json, CSV and PNG beside it); "
+        f"total {time.perf_counter() - t_start:.2f} s"
+    )
+    errors = [r.error for r, _ in runs if r.error]
+    if errors:
+        sys.stderr.write(f"thermost: {errors[0]} (trace so far kept in {out_dir})\n")
+        return 1
+    return 0

@@ -1,0 +1,45 @@
+"""Sub-commands of the harness: `thermost run`, `thermost scenarios`, `thermost regmap`.
+
+Handlers are imported lazily so `thermost --help` stays fast.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+
+
+def _lazy(target: str):
+    module_name, func_name = target.split(":")
+
+    def handler(args: argparse.Namespace) -> int:
+        return getattr(importlib.import_module(module_name), func_name)(args)
+
+    return handler
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("run", help="run a scenario against the embedded soft-PLC (default) or a PLC")
+    p.add_argument(
+        "scenario", nargs="?", help="scenario .toml file or shipped name (default: seed 003 hot end)"
+    )
+    p.add_argument("--plc", metavar="HOST:PORT", help="use this PLC (OpenPLC or `thermost plc`) instead")
+    p.add_argument("--realtime", action="store_true", help="embedded soft-PLC on its real-time clock")
+    p.add_argument(
+        "--speed",
+        type=float,
+        default=1.0,
+        metavar="N",
+        help="real time only: plant runs N x faster than the wall clock (shorten the TASK interval)",
+    )
+    p.add_argument("--out", metavar="DIR", help="report directory (default out/<scenario>)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(handler=_lazy("modbus_bridge.cli:main_run"))
+
+    p = sub.add_parser("scenarios", help="list the shipped scenarios")
+    p.set_defaults(handler=_lazy("modbus_bridge.cli:main_scenarios"))
+
+    p = sub.add_parser("regmap", help="print the Modbus register map derived from the application")
+    p.add_argument("--markdown", action="store_true", help="markdown (docs/register-map.md)")
+    p.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of stdout")
+    p.set_defaults(handler=_lazy("modbus_bridge.cli:main_regmap"))

@@ -1,0 +1,143 @@
+"""Run a scenario end to end: register map + zone bindings, the PLC (embedded soft-PLC, stepped or
+real time, or an external PLC at HOST:PORT), one run per controller variant, metrics and reports.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import sys
+import time
+from dataclasses import dataclass, field
+
+from .analysis import PhaseMetrics, run_metrics
+from .binding import ControllerCodes, ZoneBinding, resolve_zone
+from .client import PlcClient
+from .loop import ProgressFn, RunResult, close_loop
+from .regmap import RegisterMap, load_register_map
+from .scenario import Scenario
+
+RESET_SCANS = 2
+EXTERNAL_RESET_WAIT_S = 0.5
+
+
+@dataclass
+class HarnessSetup:
+    """What a run needs besides the scenario: the program, its register map, the enum codes."""
+
+    regmap: RegisterMap
+    codes: ControllerCodes
+    program: str | None = None  # ST text for the embedded soft-PLC (None: the project bundle)
+    startup_s: float = 0.0
+    notes: list[str] = field(default_factory=list)
+
+    @staticmethod
+    def default() -> HarnessSetup:
+        return HarnessSetup(regmap=load_register_map(), codes=ControllerCodes.load())
+
+    def bindings(self, scenario: Scenario) -> dict[int, ZoneBinding]:
+        return {z.plc_zone: resolve_zone(self.regmap, z.plc_zone) for z in scenario.zones}
+
+    def program_text(self) -> str:
+        if self.program is None:
+            from plc.bundle import bundle_text
+
+            self.program = bundle_text()
+        return self.program
+
+
+def parse_host_port(text: str) -> tuple[str, int]:
+    host, sep, port = text.rpartition(":")
+    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise ValueError(f"--plc expects HOST:PORT, got {text!r}")
+    return host, int(port)
+
+
+async def _reset_controllers(
+    client: PlcClient, bindings: dict[int, ZoneBinding], codes: ControllerCodes, stepped: bool
+) -> None:
+    """Fresh controller state before a run on a PLC that may have run before (mode RESET, then IDLE)."""
+    if "RESET" not in codes.modes:
+        return
+    await client.write_tags({b["mode"]: codes.modes["RESET"] for b in bindings.values()})
+    if stepped:
+        await client.step(RESET_SCANS)
+    else:
+        await asyncio.sleep(EXTERNAL_RESET_WAIT_S)
+
+
+async def run_variants(
+    scenario: Scenario,
+    setup: HarnessSetup,
+    *,
+    plc: str | None = None,
+    realtime: bool = False,
+    speed: float = 1.0,
+    progress: ProgressFn | None = None,
+    max_plant_time_s: float | None = None,
+) -> list[tuple[RunResult, list[PhaseMetrics]]]:
+    """One run per variant; with the embedded soft-PLC each variant gets a freshly loaded program."""
+    bindings = setup.bindings(scenario)
+    runs: list[tuple[RunResult, list[PhaseMetrics]]] = []
+    for variant in scenario.variants:
+        if plc is not None:
+            host, port = parse_host_port(plc)
+            async with PlcClient(host, port, setup.regmap, name="PLC") as client:
+                stepped = await client.stepped()
+                await _reset_controllers(client, bindings, setup.codes, stepped)
+                result = await close_loop(
+                    scenario,
+                    variant,
+                    client,
+                    bindings,
+                    setup.codes,
+                    realtime=not stepped,
+                    speed=speed,
+                    progress=progress,
+                    max_plant_time_s=max_plant_time_s,
+                )
+        else:
+            from plc.runtime.server import SoftPlc
+
+            t0 = time.perf_counter()
+            text = setup.program_text()
+            async with SoftPlc(text, host="127.0.0.1", port=0, stepped=not realtime) as soft:
+                setup.startup_s += time.perf_counter() - t0
+                async with PlcClient("127.0.0.1", soft.port, setup.regmap, name="soft-PLC") as client:
+                    result = await close_loop(
+                        scenario,
+                        variant,
+                        client,
+                        bindings,
+                        setup.codes,
+                        realtime=realtime,
+                        speed=speed,
+                        progress=progress,
+                        max_plant_time_s=max_plant_time_s,
+                    )
+        runs.append((result, run_metrics(result)))
+    return runs
+
+
+class ProgressBar:
+    """A one-line progress bar on stderr (plant time done / planned)."""
+
+    WIDTH = 30
+
+    def __init__(self, label: str, stream=sys.stderr) -> None:
+        self.label, self.stream = label, stream
+        self.enabled = True
+
+    def __call__(self, done: float, total: float) -> None:
+        if not self.enabled or total <= 0:
+            return
+        frac = min(1.0, done / total)
+        filled = int(self.WIDTH * frac)
+        self.stream.write(
+            f"\r{self.label} [{'#' * filled}{'.' * (self.WIDTH - filled)}] {done:6.0f}/{total:.0f} s"
+        )
+        self.stream.flush()
+
+    def close(self) -> None:
+        if self.enabled:
+            self.stream.write("\n")
+            self.stream.flush()

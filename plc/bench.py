@@ -1,0 +1,185 @@
+"""`thermost bench` / `make bench`: benchmark figures (printed, never asserted).
+
+1. scans per second of the soft-PLC on the conformance PID case and on the largest program
+   the project ships (the bundle: library + application);
+2. wall time of 6,000 stepped scans with one Modbus write and one read per scan over
+   loopback (soft-PLC in a separate process, as a harness sees it), in three request styles;
+3. figures of the other packages: `modbus_bridge.bench.run(quick)`, `plc.bench_adapter.run(quick)`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import os
+import re
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from plc.runtime.rawclient import RawModbusClient
+
+ROOT = Path(__file__).resolve().parents[1]
+STEPPED_SCANS = 6000
+STEPPED_SCANS_QUICK = 1000
+TARGET_STEPPED_S = 3.0
+SCAN_BUDGET_S = 2.0
+SCAN_BUDGET_QUICK_S = 0.5
+PID_CASE = "pid_plant"
+START_TIMEOUT_S = 60
+STOP_TIMEOUT_S = 10
+OUTPUT_WORDS = 8
+DEFAULT_IO_ADDRESS = 2048  # %MD0
+CLI_SNIPPET = "import sys; from plc.cli import main; sys.exit(main())"  # `-m plc.cli` would duplicate classes
+EXTERNAL_BENCHES = ("modbus_bridge.bench", "plc.bench_adapter")
+
+
+def conformance_dir() -> Path | None:
+    """../shared/conformance (or $THERMOST_SHARED/conformance) when present."""
+    env = os.environ.get("THERMOST_SHARED")
+    candidates = [Path(env)] if env else []
+    candidates += [ROOT.parent / "shared", ROOT / "shared"]
+    for candidate in candidates:
+        if (candidate / "conformance").is_dir():
+            return candidate / "conformance"
+    return None
+
+
+def scans_per_second(load: Callable[[], object], budget_s: float) -> tuple[float, int]:
+    """Fresh applications scanned back to back for about `budget_s`; (scans/s, scans)."""
+    scans = 0
+    elapsed = 0.0
+    while elapsed < budget_s:
+        app = load()
+        start = time.perf_counter()
+        for _ in range(200):
+            app.scan()  # type: ignore[attr-defined]
+        elapsed += time.perf_counter() - start
+        scans += 200
+    return scans / elapsed, scans
+
+
+def _loader(filename: str, text: str) -> Callable[[], object]:
+    from plc.st.compiler import load_application
+
+    return lambda: load_application([(filename, text)])
+
+
+def bench_scan_rates(quick: bool) -> None:
+    budget = SCAN_BUDGET_QUICK_S if quick else SCAN_BUDGET_S
+    folder = conformance_dir()
+    if folder is None:
+        print("scan rate, conformance pid_plant: skipped (conformance corpus not found)")
+    else:
+        path = folder / f"{PID_CASE}.st"
+        rate, n = scans_per_second(_loader(str(path), path.read_text()), budget)
+        print(f"scan rate, conformance pid_plant: {rate:,.0f} scans/s ({n} scans)")
+    from plc.bundle import bundle_text
+
+    text = bundle_text()
+    if "CONFIGURATION" not in text.upper():
+        print("scan rate, bundle: skipped (the bundle has no CONFIGURATION yet)")
+        return
+    try:
+        rate, n = scans_per_second(_loader("<bundle>", text), budget)
+    except Exception as exc:  # noqa: BLE001 - a benchmark reports, it does not fail
+        print(f"scan rate, bundle: skipped ({type(exc).__name__}: {exc})")
+        return
+    print(f"scan rate, bundle ({len(text.splitlines())} lines of ST): {rate:,.0f} scans/s ({n} scans)")
+
+
+def _bench_program() -> tuple[Path, str]:
+    """The bundle when it has a CONFIGURATION, else the conformance PID case."""
+    from plc.bundle import bundle_text
+
+    text = bundle_text()
+    if "CONFIGURATION" in text.upper():
+        handle = tempfile.NamedTemporaryFile("w", suffix=".st", delete=False)
+        with handle:
+            handle.write(text)
+        return Path(handle.name), "bundle"
+    folder = conformance_dir()
+    if folder is None:
+        raise FileNotFoundError("neither a bundle with a CONFIGURATION nor the conformance corpus")
+    return folder / f"{PID_CASE}.st", "conformance pid_plant"
+
+
+def _start_plc(path: Path) -> tuple[subprocess.Popen, int]:
+    proc = subprocess.Popen(
+        [sys.executable, "-c", CLI_SNIPPET, "plc", str(path), "--stepped", "--port", "0"],
+        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+    )
+    line = proc.stdout.readline() if proc.stdout else ""
+    match = re.search(r"listening on [\d.]+:(\d+)", line)
+    if not match:
+        proc.kill()
+        proc.wait(STOP_TIMEOUT_S)
+        raise RuntimeError(f"soft-PLC did not start: {line!r}")
+    return proc, int(match.group(1))
+
+
+def bench_stepped(quick: bool) -> None:
+    n = STEPPED_SCANS_QUICK if quick else STEPPED_SCANS
+    path, label = _bench_program()
+    proc, port = _start_plc(path)
+    try:
+        with RawModbusClient("127.0.0.1", port) as client:
+            address = DEFAULT_IO_ADDRESS  # words read first and written back unchanged
+            words = client.read_holding(address, 2)
+            styles = {
+                "FC16 write + FC6 step + FC3 read (3 round trips)": lambda: (
+                    client.write_registers(address, words), client.step(1),
+                    client.read_holding(address, OUTPUT_WORDS)),
+                "FC16 write + FC23 step&read (2 round trips)": lambda: (
+                    client.write_registers(address, words),
+                    client.step_and_read(1, address, OUTPUT_WORDS)),
+                "FC23 write&read with RW_STEPS=1 (1 round trip)": lambda: client.read_write(
+                    address, OUTPUT_WORDS, address, words),
+            }
+            for name, iteration in styles.items():
+                client.set_rw_steps(1 if "RW_STEPS" in name else 0)
+                before = client.status().scan_count
+                start = time.perf_counter()
+                for _ in range(n):
+                    iteration()
+                elapsed = time.perf_counter() - start
+                ran = client.status().scan_count - before
+                met = "met" if elapsed < TARGET_STEPPED_S else "MISSED"
+                verdict = "" if quick else f" (target < {TARGET_STEPPED_S:g} s: {met})"
+                print(f"stepped, {label}, {n} scans [{name}]: {elapsed:.2f} s, "
+                      f"{1e6 * elapsed / n:.0f} us/scan, {ran} scans ran{verdict}")
+            status = client.status()
+            if status.faulted:
+                print(f"  note: the program faulted during the bench: {status.fault_text}")
+    finally:
+        proc.send_signal(signal.SIGINT)
+        proc.wait(STOP_TIMEOUT_S)
+        if label == "bundle":
+            path.unlink(missing_ok=True)
+
+
+def run_external(quick: bool) -> None:
+    for module_name in EXTERNAL_BENCHES:
+        try:
+            module = importlib.import_module(module_name)
+        except ModuleNotFoundError as exc:
+            if exc.name and module_name.startswith(exc.name):
+                print(f"{module_name}: not available")
+                continue
+            raise
+        print(f"--- {module_name}")
+        module.run(quick)
+
+
+def main_bench(args: argparse.Namespace) -> int:
+    quick = bool(getattr(args, "quick", False))
+    print(f"ThermoST bench ({'quick' if quick else 'full'}; figures only, nothing asserted)")
+    bench_scan_rates(quick)
+    bench_stepped(quick)
+    run_external(quick)
+    return 0
+

@@ -42,6 +42,8 @@ def pt100_temperature(resistance_ohm: float, r0_ohm: float = PT100_R0_OHM) -> fl
     ratio = resistance_ohm / r0_ohm
     if ratio >= 1.0:
         disc = CVD_A * CVD_A - 4.0 * CVD_B * (1.0 - ratio)
+        if disc < 0.0:  # beyond the parabola's vertex (open sensor): linear, clearly out of range
+            return (ratio - 1.0) / CVD_A
         return (-CVD_A + math.sqrt(disc)) / (2.0 * CVD_B)
     t = (ratio - 1.0) / CVD_A
     for _ in range(20):
@@ -64,7 +66,9 @@ def ntc_resistance(temp_c: float, r25_ohm: float, beta_k: float, t0_c: float = 2
 def ntc_temperature(resistance_ohm: float, r25_ohm: float, beta_k: float, t0_c: float = 25.0) -> float:
     t0_k = t0_c + KELVIN_OFFSET
     inv = 1.0 / t0_k + math.log(resistance_ohm / r25_ohm) / beta_k
-    return 1.0 / inv - KELVIN_OFFSET
+    if inv <= 0.0:  # a (near) short circuit: beyond any physical temperature
+        return SHORT_READING_C
+    return min(1.0 / inv - KELVIN_OFFSET, SHORT_READING_C)
 
 
 @dataclass
@@ -147,9 +151,7 @@ class Sensor:
         """Open or shorted sensor: the raw value goes to the end of the ADC range."""
         if self.adc.kind == "none":
             return OPEN_READING_C if self.fault == "open" else SHORT_READING_C
-        open_counts = self.adc.full_scale
-        if self.adc.kind == "pt100":  # open RTD: infinite resistance reads full scale
-            self.last_counts = open_counts if self.fault == "open" else 0
-        else:  # NTC with pull-up: open reads full scale (very cold), short reads 0 (very hot)
-            self.last_counts = open_counts if self.fault == "open" else 0
+        # open RTD reads full scale (very hot), shorted 0; an NTC with pull-up: open reads full scale
+        # (very cold), shorted 0 (very hot)
+        self.last_counts = self.adc.full_scale if self.fault == "open" else 0
         return self.adc.from_counts(self.last_counts)

@@ -53,7 +53,7 @@ class DelayLine:
     def __init__(self, delay_s: float, dt: float, initial: float = 0.0) -> None:
         if delay_s < 0.0 or dt <= 0.0:
             raise ValueError("delay must be >= 0 and dt > 0")
-        steps = delay_s / dt
+        steps = round(delay_s / dt, 9)  # 0.3/0.1 is 2.9999999999999996 in binary floating point
         self._whole = int(math.floor(steps))
         self._frac = steps - self._whole
         self._buffer: deque[float] = deque([initial] * (self._whole + 2), maxlen=self._whole + 2)

@@ -80,3 +80,26 @@ def f32(value: float) -> float:
     import struct
 
     return struct.unpack("f", struct.pack("f", value))[0]
+
+
+CONTROLLER_PROGRAM_DECLS = """    sPar : ST_ControllerParameter;
+    fbUut : FB_TempController;
+    nMode : INT;
+    nModeRejected : BOOL;
+    nRule : INT;
+    nState : INT;
+    nTuneState : INT;
+    nRuleUsed : INT;"""
+
+CONTROLLER_PROGRAM_BODY = """  fbUut.eCtrlMode := FC_CtrlModeFromInt(nMode := nMode,
+    eLastValid := fbUut.eCtrlMode, bRejected => nModeRejected);
+  sPar.eTuneRule := FC_TuneRuleFromInt(nRule := nRule, eLastValid := sPar.eTuneRule);
+  fbUut(sParam := sPar);
+  nState := FC_CtrlStateToInt(eState := fbUut.eCtrlState);
+  nTuneState := FC_CtrlTuneStateToInt(eTuneState := fbUut.eTuneState);
+  nRuleUsed := FC_TuneRuleToInt(eRule := sPar.eTuneRuleUsed);"""
+
+
+def controller_program() -> str:
+    """A PROGRAM driving one FB_TempController (instance `fbUut`, parameters `sPar`, mode code `nMode`)."""
+    return build_program(CONTROLLER_PROGRAM_DECLS, CONTROLLER_PROGRAM_BODY)

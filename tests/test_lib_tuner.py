@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import pytest
 
-from tests.st_helpers import ScanDriver, build_program, load_test_app
+from tests.st_helpers import ScanDriver, controller_program, load_test_app
 
 TS = 0.2  # control and task cycle of these tests, s
 MODE_ACTIVE, MODE_TUNE = 2, 5
@@ -17,21 +17,7 @@ STATE_ACTIVE, STATE_TUNING, STATE_TUNED, STATE_ERROR = 2, 5, 6, 8
 TUNE_READY, TUNE_ERROR = 4, 5
 RULE_AUTO, RULE_CHR, RULE_COHEN_COON, RULE_SIMC = 0, 1, 2, 3
 
-PROGRAM = build_program(
-    """    sPar : ST_ControllerParameter;
-    fbUut : FB_TempController;
-    nMode : INT;
-    nRule : INT;
-    nState : INT;
-    nTuneState : INT;
-    nRuleUsed : INT;""",
-    """  fbUut.eCtrlMode := FC_CtrlModeFromInt(nMode := nMode, eLastValid := fbUut.eCtrlMode);
-  sPar.eTuneRule := FC_TuneRuleFromInt(nRule := nRule, eLastValid := sPar.eTuneRule);
-  fbUut(sParam := sPar);
-  nState := FC_CtrlStateToInt(eState := fbUut.eCtrlState);
-  nTuneState := FC_CtrlTuneStateToInt(eTuneState := fbUut.eTuneState);
-  nRuleUsed := FC_TuneRuleToInt(eRule := sPar.eTuneRuleUsed);""",
-)
+PROGRAM = controller_program()
 
 
 @dataclass

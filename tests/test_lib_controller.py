@@ -1,0 +1,136 @@
+"""FB_TempController modes, bumpless transfer, setpoint chain and heating/cooling split."""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.st_helpers import ScanDriver, controller_program, load_test_app
+
+IDLE, PASSIVE, ACTIVE, RESET, MANUAL, TUNE = 0, 1, 2, 3, 4, 5
+TS = 0.1
+
+
+@pytest.fixture()
+def uut() -> ScanDriver:
+    drv = ScanDriver(load_test_app(controller_program()))
+    for name, value in (("fKp", 2.0), ("fTn", 10.0), ("fTv", 0.0), ("fTd", 0.0), ("fWatchPeriod", 0.0),
+                        ("fRunawayPeriod", 0.0)):
+        drv.set(f"sPar.{name}", value)
+    return drv
+
+
+def scan(drv: ScanDriver, mode: int, x: float, n: int = 1, w1: float = 50.0) -> float:
+    drv.set("nMode", mode)
+    drv.set("fbUut.fX", x)
+    drv.set("fbUut.fW1", w1)
+    drv.scan(n)
+    return drv.get("fbUut.fY")
+
+
+def test_active_p_plus_i(uut: ScanDriver) -> None:
+    y = scan(uut, ACTIVE, 45.0)
+    assert y == pytest.approx(2.0 * 5.0 + 2.0 * TS / 10.0 * 5.0, rel=1e-4)
+    assert uut.get("nState") == ACTIVE
+
+
+def test_passive_outputs_zero_and_keeps_state(uut: ScanDriver) -> None:
+    scan(uut, ACTIVE, 45.0, n=50)
+    i_before = uut.get("fbUut.fI")
+    assert scan(uut, PASSIVE, 45.0, n=20) == 0.0
+    assert uut.get("nState") == PASSIVE
+    assert not uut.get("fbUut.bYPWMPos")
+    assert uut.get("fbUut.fI") == pytest.approx(i_before)
+    y = scan(uut, ACTIVE, 45.0)
+    assert y == pytest.approx(10.0 + i_before + 0.1, rel=1e-4)
+
+
+def test_reset_clears_integrator(uut: ScanDriver) -> None:
+    scan(uut, ACTIVE, 45.0, n=50)
+    assert uut.get("fbUut.fI") > 4.0
+    assert scan(uut, RESET, 45.0) == 0.0
+    assert uut.get("nState") == RESET
+    assert uut.get("fbUut.fI") == 0.0
+    assert scan(uut, ACTIVE, 45.0) == pytest.approx(10.1, rel=1e-4)
+
+
+def test_manual_and_bumpless_return(uut: ScanDriver) -> None:
+    scan(uut, ACTIVE, 45.0, n=20)
+    uut.set("fbUut.fYManual", 37.5)
+    assert scan(uut, MANUAL, 45.0, n=5) == pytest.approx(37.5)
+    assert uut.get("nState") == MANUAL
+    y = scan(uut, ACTIVE, 45.0)
+    assert y == pytest.approx(37.5, abs=0.2)  # bumpless: only one integral step away
+    assert scan(uut, ACTIVE, 45.0) - y == pytest.approx(0.1, rel=1e-3)
+
+
+def test_manual_value_limited(uut: ScanDriver) -> None:
+    uut.set("fbUut.fYManual", 150.0)
+    assert scan(uut, MANUAL, 45.0) <= 100.0
+    uut.set("fbUut.fYManual", -50.0)
+    assert scan(uut, MANUAL, 45.0) == 0.0  # fYMin = 0
+
+
+def test_setpoint_selection_w2(uut: ScanDriver) -> None:
+    uut.set("fbUut.fW2", 30.0)
+    uut.set("fbUut.bSelSetpoint", True)
+    scan(uut, ACTIVE, 45.0)
+    assert uut.get("fbUut.fW") == 30.0
+    assert uut.get("fbUut.fE") == pytest.approx(-15.0)
+
+
+def test_setpoint_ramp(uut: ScanDriver) -> None:
+    uut.set("sPar.bEnableRamping", True)
+    uut.set("sPar.fWVeloPos", 2.0)
+    scan(uut, ACTIVE, 20.0, n=1, w1=50.0)
+    assert uut.get("fbUut.fW") == pytest.approx(20.2, rel=1e-4)  # ramp starts at X
+    scan(uut, ACTIVE, 20.0, n=99, w1=50.0)
+    assert uut.get("fbUut.fW") == pytest.approx(40.0, rel=1e-3)
+    scan(uut, ACTIVE, 20.0, n=100, w1=50.0)
+    assert uut.get("fbUut.fW") == pytest.approx(50.0)
+
+
+def test_soft_start_plateau(uut: ScanDriver) -> None:
+    for name, value in (("bEnableSoftStart", True), ("fWStartUp", 30.0), ("fTStartUp", 5.0),
+                        ("fWStartUpVelo", 10.0)):
+        uut.set(f"sPar.{name}", value)
+    scan(uut, ACTIVE, 20.0, n=10, w1=80.0)
+    assert uut.get("fbUut.fW") == pytest.approx(30.0)
+    scan(uut, ACTIVE, 20.0, n=45, w1=80.0)
+    assert uut.get("fbUut.fW") == pytest.approx(30.0)  # still holding the plateau
+    scan(uut, ACTIVE, 20.0, n=10, w1=80.0)
+    assert uut.get("fbUut.fW") == pytest.approx(80.0)
+
+
+def test_heating_cooling_split_uses_cooling_set(uut: ScanDriver) -> None:
+    for name, value in (("fYMin", -100.0), ("fKpCool", 8.0), ("fTnCool", 0.0), ("fTn", 0.0)):
+        uut.set(f"sPar.{name}", value)
+    y = scan(uut, ACTIVE, 55.0)  # previous output 0: heating set, P = 2 * -5
+    assert y == pytest.approx(-10.0)
+    y = scan(uut, ACTIVE, 55.0)  # output < 0: cooling set; the new gain enters bumplessly
+    assert uut.get("fbUut.bCoolingSet") is True
+    assert y == pytest.approx(-10.0)
+    y = scan(uut, ACTIVE, 56.0)  # error change -1 with Kp cool 8
+    assert y == pytest.approx(-18.0)
+    pos = neg = 0
+    for _ in range(100):
+        scan(uut, ACTIVE, 56.0)
+        pos += uut.get("fbUut.bYPWMPos")
+        neg += uut.get("fbUut.bYPWMNeg")
+    assert pos == 0 and neg == pytest.approx(18, abs=1)
+
+
+def test_cycle_time_divider(uut: ScanDriver) -> None:
+    uut.set("sPar.fCtrlCycleTime", 0.5)
+    ys = [scan(uut, ACTIVE, 45.0) for _ in range(10)]
+    # the PID runs every 5th call; the integral step is Kp*0.5/Tn*e = 0.5
+    assert len(set(round(y, 4) for y in ys)) == 2
+    assert ys[-1] - ys[0] == pytest.approx(0.5, rel=1e-3)
+
+
+def test_time_shim_counts_seconds() -> None:
+    from tests.st_helpers import build_program
+
+    prog = build_program("    fSec : REAL;", "  fSec := FC_TimeToSeconds(tValue := T#1250ms);")
+    drv = ScanDriver(load_test_app(prog))
+    drv.scan()
+    assert drv.get("fSec") == pytest.approx(1.25)

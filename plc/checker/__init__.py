@@ -23,9 +23,10 @@ def check_sources(sources: list[tuple[str, str]]) -> list[Diagnostic]:
     parsed = [parse_source(sc.blanked, filename) for sc, (filename, _) in zip(scans, sources, strict=True)]
     for ps, (_, text) in zip(parsed, sources, strict=True):
         ps.text = text
-    symbols = collect(parsed)
     found: set[Diagnostic] = set()
-    for ps, sc in zip(parsed, scans, strict=True):
+    for index, (ps, sc) in enumerate(zip(parsed, scans, strict=True)):
+        # every file sees the declarations of the others; its own win when names clash
+        symbols = collect([*parsed[:index], *parsed[index + 1 :], ps])
         found.update(FileChecker(ps, sc, symbols).run())
     return sorted(found, key=lambda d: (d.filename, d.line, d.col, d.message))
 

@@ -107,6 +107,9 @@ class FileChecker:
         for finding in self.lexical.findings:
             self.report_offset(finding.offset, finding.message)
         self.text_rules()
+        # a construct recognised above explains the parse error on its line: report it only once
+        specific = {d.line for d in self.diagnostics}
+        self.diagnostics.extend(d for d in self.ps.syntax_errors() if d.line not in specific)
         root = self.ps.tree.root_node
         for node in root.named_children:
             if node.type == "global_var_declaration_block":
@@ -124,10 +127,6 @@ class FileChecker:
             if node.type == "type_definition":
                 self.type_definition_rules(node)
         self.naming_rules()
-        specific = {(d.line) for d in self.diagnostics}
-        for d in self.ps.syntax_errors():
-            if d.line not in specific:
-                self.diagnostics.append(d)
         return self.diagnostics
 
     # ---- text rules for constructs the grammar cannot represent ---------------------------------
@@ -427,7 +426,9 @@ class FileChecker:
                 if kind == "assignment_statement":
                     left, right = node.child_by_field_name("left"), node.child_by_field_name("right")
                     if left is not None and right is not None:
-                        typer.check_assignment(left, right, right)
+                        typer.check_assignment(left, right, node)  # MatIEC points at the statement
+                    if left is not None and left.type == "identifier":
+                        self.undeclared_target_rule(pou, left)
                 elif kind == "invocation_statement":
                     for call in node.named_children:
                         if call.type == "call_expression":
@@ -442,6 +443,12 @@ class FileChecker:
                     typer.type(node)
                 elif kind == "identifier":
                     self.global_use_rule(pou, node)
+
+    def undeclared_target_rule(self, pou: Pou, target: Node) -> None:
+        name = self.ps.node_text(target).upper()
+        if name in pou.vars or name == pou.name.upper() or name in self.symbols.globals:
+            return  # globals used without VAR_EXTERNAL have their own message
+        self.report(target, f"variable '{self.ps.node_text(target)}' is not declared in this POU")
 
     def global_use_rule(self, pou: Pou, node: Node) -> None:
         parent = node.parent

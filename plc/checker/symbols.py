@@ -151,8 +151,8 @@ def block_variables(block: Node, ps: ParsedSource) -> list[VarInfo]:
 def _collect_type(defn: Node, ps: ParsedSource, symbols: Symbols) -> None:
     name_node = defn.child_by_field_name("name")
     body = defn.child_by_field_name("definition")
-    if name_node is None:
-        return
+    if name_node is None or defn.has_error:
+        return  # a definition the grammar could not parse is only reported, never trusted
     name = ps.node_text(name_node).upper()
     decl = TypeDecl(name=name, kind="other")
     if body is None:
@@ -215,6 +215,8 @@ def _walk_top(root: Node):
     """Top-level declarations, looking inside TYPE blocks and (refused) NAMESPACEs."""
     for node in root.named_children:
         if node.type == "type_declaration":
+            if node.has_error:
+                continue  # a TYPE block that did not parse is reported, its names are not trusted
             yield from (c for c in node.named_children if c.type == "type_definition")
         elif node.type == "namespace_declaration":
             yield from _walk_top(node)

@@ -179,7 +179,7 @@ class ExpressionTyper:
         if mixed and not (left in (ANY_INT, ANY_REAL) and right in (ANY_INT, ANY_REAL)):
             self.report(
                 node,
-                f"data type mismatch for '{op}': {left} and {right} operands "
+                f"data type mismatch for '{op}': {_describe(left)} and {_describe(right)} operands "
                 f"(MatIEC has no implicit conversion; use an explicit *_TO_* conversion"
                 f"{' or a real literal such as 2.0' if ANY_INT in (left, right) else ''})",
             )
@@ -188,7 +188,7 @@ class ExpressionTyper:
             self.report(
                 node,
                 f"data type mismatch for '{op}': {left} and {right} operands "
-                f"(convert one side explicitly, e.g. {left}_TO_{right})",
+                f"(convert one side explicitly, e.g. {_widening(left, right)})",
             )
             return result_if_ok
         return result_if_ok or _unify(left, right)
@@ -293,6 +293,36 @@ class ExpressionTyper:
         why = compatibility(self.resolve(self.type(target)), self.resolve(self.type(value)))
         if why:
             self.report(where, f"incompatible data types for ':=': {why}")
+
+
+def _describe(t: TypeT) -> str:
+    return (
+        {ANY_INT: "integer literal", ANY_REAL: "real literal"}.get(t, str(t)) if isinstance(t, str) else "?"
+    )
+
+
+# Bytes per elementary type, to suggest the widening conversion in a message.
+_WIDTH = {
+    "SINT": 1,
+    "USINT": 1,
+    "BYTE": 1,
+    "INT": 2,
+    "UINT": 2,
+    "WORD": 2,
+    "DINT": 4,
+    "UDINT": 4,
+    "DWORD": 4,
+    "REAL": 4,
+    "LINT": 8,
+    "ULINT": 8,
+    "LWORD": 8,
+    "LREAL": 8,
+}
+
+
+def _widening(a: str, b: str) -> str:
+    narrow, wide = (a, b) if _WIDTH.get(a, 0) <= _WIDTH.get(b, 0) else (b, a)
+    return f"{narrow}_TO_{wide}"
 
 
 def _unify(a: TypeT, b: TypeT) -> TypeT:

@@ -98,6 +98,7 @@ class ZoneSequencer:
         self.ramp_rate_c_s = 0.0
         self.pending: list = []
         self.finished = False
+        self.plant: Plant | None = None
 
     @property
     def phase(self) -> Phase:
@@ -202,6 +203,8 @@ class ZoneSequencer:
             self.dist.heater_failed = True
         elif kind == "sensor_fault":
             self.sensor.fault = str(value)
+        elif kind == "model_mismatch" and self.plant is not None:
+            self.plant.time_constant_scale = float(value)  # type: ignore[attr-defined, arg-type]
 
 
 def required_roles(scenario: Scenario, zone: Zone) -> list[str]:
@@ -267,6 +270,8 @@ async def close_loop(
         ZoneSequencer(z, bindings[z.plc_zone], codes, variant, pdist.zones[z.channel], pdist, s, tr)
         for z, s, tr in zip(scenario.zones, sensors, traces, strict=True)
     ]
+    for seq in seqs:
+        seq.plant = plant
     result = RunResult(scenario=scenario, variant=variant, zones=traces, realtime=realtime)
     dt = scenario.dt_s
     horizon = max_plant_time_s or scenario.nominal_duration_s

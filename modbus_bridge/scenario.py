@@ -7,6 +7,7 @@ path and why. The format is documented in docs/harness.md.
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -33,6 +34,7 @@ DISTURBANCE_FIELDS: dict[str, dict[str, type]] = {
     "filament": {"speed_mm_s": float},
     "heater_fail": {},
     "sensor_fault": {"fault": str},
+    "model_mismatch": {"time_constant_scale": float},
 }
 SENSOR_FAULTS = ("open", "short", "none")
 
@@ -151,6 +153,9 @@ class _Table:
         self.used.add(name)
         if name not in self.data:
             if default is ...:
+                typo = difflib.get_close_matches(name, [k for k in self.data if k not in self.used], n=1)
+                if typo:
+                    self.fail(typo[0], f"unknown key (did you mean '{name}'?)")
                 self.fail(name, "missing required field")
             return default
         value = self.data[name]
@@ -263,6 +268,8 @@ def _disturbance(tab: _Table, phase_duration: float | None) -> Disturbance:
             value = tab.get(name, float, minimum=0.0, maximum=1.0)
         elif name == "speed_mm_s":
             value = tab.get(name, float, minimum=0.0)
+        elif name == "time_constant_scale":
+            value = tab.get(name, float, above=0.0)
         else:
             value = tab.get(name, float)
     tab.done()

@@ -1,0 +1,143 @@
+"""Loop closer end to end against the embedded soft-PLC, with a tiny fixture program
+(tests/harness_fixtures/p_harness_test.st) so these tests do not depend on the controller library."""
+
+from __future__ import annotations
+
+import asyncio
+import dataclasses
+import socket
+from pathlib import Path
+
+import pytest
+
+from modbus_bridge.binding import ControllerCodes, resolve_zone
+from modbus_bridge.client import PlcClient, PlcError
+from modbus_bridge.loop import check_bindings, close_loop
+from modbus_bridge.regmap import RegisterMapError, load_register_map
+from modbus_bridge.runner import HarnessSetup, run_variants
+from modbus_bridge.scenario import Variant, load_scenario
+
+FIXTURES = Path(__file__).parent / "harness_fixtures"
+PROGRAM = (FIXTURES / "p_harness_test.st").read_text(encoding="utf-8")
+SCENARIO = FIXTURES / "small_fopdt.toml"
+
+server = pytest.importorskip("plc.runtime.server", reason="the soft-PLC runtime is needed")
+
+
+def setup() -> HarnessSetup:
+    regmap = load_register_map(sources=[("p_harness_test.st", PROGRAM)])
+    return HarnessSetup(regmap=regmap, codes=ControllerCodes.load(), program=PROGRAM)
+
+
+def run(scenario, **kw):
+    return asyncio.run(run_variants(scenario, setup(), **kw))
+
+
+def test_closed_loop_runs_phases_and_is_deterministic():
+    sc = load_scenario(SCENARIO)
+    ((r1, m1),) = run(sc)
+    ((r2, _),) = run(sc)
+    assert r1.error is None
+    tr = r1.zones[0]
+    assert [p.name for p in tr.phases] == ["tune", "step", "load"]
+    tune = tr.phases[0]
+    # the fixture reports TUNED after 100 scans: the phase ends on that event, not on a timer
+    assert tune.outcome == "ok" and 10.0 <= tune.t_end - tune.t_start <= 10.5
+    assert tr.phases[2].disturbances and tr.phases[2].disturbances[0][1] == "load_step"
+    assert r1.plant_time_s == pytest.approx(tr.phases[-1].t_end)
+    # stepped mode is deterministic bit for bit (same seed -> same noise, same PLC arithmetic)
+    assert r1.zones[0].pv == r2.zones[0].pv and r1.zones[0].u == r2.zones[0].u
+    step = next(pm for pm in m1 if pm.phase == "step")
+    assert step.kind == "step" and step.values["rise_time_s"] > 0
+    load = next(pm for pm in m1 if pm.phase == "load")
+    assert load.kind == "disturbance" and "recovery_time_2pct_s" in load.values
+    # the PI fixture compensates the 5 % load: its output ends about 5 % higher than before the load
+    u_before = [
+        u for u, t in zip(tr.u, tr.t, strict=True) if tr.phases[1].t_end - 5.0 <= t < tr.phases[1].t_end
+    ]
+    u_after = [u for u, t in zip(tr.u, tr.t, strict=True) if t >= tr.phases[2].t_end - 5.0]
+    assert sum(u_after) / len(u_after) - sum(u_before) / len(u_before) == pytest.approx(5.0, abs=1.5)
+
+
+def test_pwm_output_path_averages_coils():
+    sc = load_scenario(SCENARIO)
+    sc = dataclasses.replace(sc, output_path="pwm")
+    ((r, m),) = run(sc)
+    assert r.error is None
+    tr = r.zones[0]
+    assert set(tr.pwm) <= {0, 1} and 0 < sum(tr.pwm) < len(tr.pwm)
+    # during the fixture's 50 % "tuning" output the PWM duty is 50 %
+    tune_pwm = [p for p, ph in zip(tr.pwm, tr.phase, strict=True) if ph == "tune"]
+    assert sum(tune_pwm) / len(tune_pwm) == pytest.approx(0.5, abs=0.02)
+    assert any("pwm_switches_per_min" in pm.values for pm in m)
+
+
+def test_raw_pv_path_writes_adc_counts():
+    sc = load_scenario(SCENARIO)
+    zone = sc.zones[0]
+    sensor = dataclasses.replace(zone.sensor, adc=dataclasses.replace(zone.sensor.adc, kind="pt100"))
+    sc = dataclasses.replace(sc, pv_path="raw", zones=[dataclasses.replace(zone, sensor=sensor)])
+
+    async def go():
+        s = setup()
+        async with server.SoftPlc(PROGRAM, port=0, stepped=True) as soft:
+            async with PlcClient("127.0.0.1", soft.port, s.regmap) as client:
+                await close_loop(sc, Variant("raw"), client, s.bindings(sc), s.codes, max_plant_time_s=1.0)
+                return await client.read("nPvRawZone1")
+
+    counts = asyncio.run(go())
+    assert counts == round(109.73 * 16)  # PT100 at 25 °C = 109.73 Ω, 1/16 Ω per count
+
+
+def test_missing_tag_is_one_clear_line():
+    sc = load_scenario(SCENARIO)
+    text = PROGRAM.replace("nStateZone1", "nStatusZone1")
+    regmap = load_register_map(sources=[("x.st", text)])
+    with pytest.raises(RegisterMapError, match="zone 1: no register for role 'state'"):
+        resolve_zone(regmap, 1)
+    s = setup()
+    bad = dataclasses.replace(
+        sc.zones[0], phases=[dataclasses.replace(sc.zones[0].phases[0], writes={"fNoSuchTag": 1.0})]
+    )
+    with pytest.raises(RegisterMapError, match="fNoSuchTag"):
+        check_bindings(dataclasses.replace(sc, zones=[bad]), s.bindings(sc), s.codes, s.regmap)
+
+
+def free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+def test_unreachable_plc_is_one_clear_line():
+    sc = load_scenario(SCENARIO)
+    with pytest.raises(PlcError, match="cannot connect to PLC at 127.0.0.1"):
+        run(sc, plc=f"127.0.0.1:{free_port()}")
+
+
+def test_plc_that_stops_answering_keeps_the_trace():
+    sc = load_scenario(SCENARIO)
+
+    async def go():
+        s = setup()
+        soft = server.SoftPlc(PROGRAM, port=0, stepped=True)
+        async with soft:
+            client = PlcClient("127.0.0.1", soft.port, s.regmap, timeout_s=0.3, retries=1)
+            await client.connect()
+
+            def progress(done: float, total: float) -> None:
+                if done >= 5.0 and not stopped:
+                    stopped.append(True)
+                    asyncio.get_running_loop().create_task(soft.close())
+
+            stopped: list[bool] = []
+            result = await close_loop(sc, Variant("x"), client, s.bindings(sc), s.codes, progress=progress)
+            client.close()
+            return result
+
+    result = asyncio.run(go())
+    assert (
+        result.error is not None and "stopped answering" in result.error or "cannot connect" in result.error
+    )
+    assert 5.0 <= result.plant_time_s < 20.0
+    assert len(result.zones[0].t) == result.steps > 0

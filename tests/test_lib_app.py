@@ -1,0 +1,158 @@
+"""The OpenPLC application plc/app (P_ThermoST + Config0) in the soft-PLC, driven through its registers."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+
+from tests.st_helpers import REPO_ROOT, ScanDriver, library_sources
+from tests.test_lib_sensors import cvd
+from tests.test_lib_tuner import Fopdt
+
+APP_DIR = REPO_ROOT / "plc" / "app"
+IDLE, ACTIVE, TUNE = 0, 2, 5
+TS = 0.1
+
+
+def app_sources() -> list[tuple[str, str]]:
+    app_files = sorted(APP_DIR.glob("*.st"))
+    return library_sources() + [(str(p.relative_to(REPO_ROOT)), p.read_text()) for p in app_files]
+
+
+@pytest.fixture()
+def plc() -> ScanDriver:
+    from plc.st.compiler import load_application
+
+    app = load_application(app_sources())
+    assert app.interval_ns == 100_000_000
+    drv = ScanDriver(app)
+    drv.scan()
+    return drv
+
+
+def close_loop(drv: ScanDriver, plant: Fopdt, seconds: float, zone: int = 1) -> None:
+    for _ in range(round(seconds / TS)):
+        drv.set(f"fPvZone{zone}", plant.measure())
+        drv.scan()
+        plant.step(drv.get(f"fYZone{zone}"))
+
+
+def test_generated_program_is_up_to_date() -> None:
+    import importlib.util
+    import sys
+
+    spec = importlib.util.spec_from_file_location("gen_p_thermost", APP_DIR / "gen_p_thermost.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["gen_p_thermost"] = module
+    spec.loader.exec_module(module)
+    assert module.generate() == (APP_DIR / "P_ThermoST.st").read_text()
+
+
+def test_located_variables_two_zones(plc: ScanDriver) -> None:
+    names = {v.name.lower() for v in plc.app.located}
+    for zone in (1, 2):
+        for role in ("fPvZone", "fSetpointZone", "nModeZone", "fYZone", "nStateZone", "dwAlarmZone",
+                     "fKpZone", "fKsZone", "fTuZone", "fTgZone", "nPvRawZone", "bPwmHeatZone", "bUseRawZone"):
+            assert f"{role}{zone}".lower() in names
+    reserved = [v for v in plc.app.located if v.area == "M" and v.size == "D" and 200 <= v.index <= 299]
+    assert reserved == []  # the fuzzy adapter's block stays free
+
+
+def test_zone1_controls_fopdt_to_setpoint(plc: ScanDriver) -> None:
+    plant = Fopdt(k=3.4, t=140.0, l=5.5, dt=TS)  # RRF default hot end (reference/control.md)
+    plc.set("fSetpointZone1", 200.0)
+    plc.set("nModeZone1", ACTIVE)
+    close_loop(plc, plant, 900.0)
+    assert plc.get("nStateZone1") == ACTIVE
+    assert plant.x == pytest.approx(200.0, abs=1.0)
+    assert plc.get("fMaxOverShootZone1") < 20.0
+
+
+def test_register_write_reaches_controller_and_nan_is_rejected(plc: ScanDriver) -> None:
+    plc.set("fKpZone1", 7.5)
+    plc.scan()
+    assert plc.get("sParZone1.fKp") == 7.5
+    plc.set("fKpZone1", math.nan)
+    plc.set("fPvZone1", 25.0)
+    plc.set("fSetpointZone1", 60.0)
+    plc.set("nModeZone1", ACTIVE)
+    plc.scan(3)
+    assert plc.get("fbZone1.sValid.fKp") == 7.5
+    assert plc.get("dwAlarmZone1") & 0x10000
+    assert math.isfinite(plc.get("fYZone1"))
+    plc.set("nModeZone1", 99)
+    plc.scan()
+    assert plc.get("nStateZone1") == ACTIVE  # unknown mode code: last valid mode kept
+    assert plc.get("dwAlarmZone1") & 0x10000
+
+
+def test_tune_through_registers_publishes_parameters(plc: ScanDriver) -> None:
+    plant = Fopdt(k=3.4, t=140.0, l=5.5, dt=TS)
+    plc.set("fSetpointZone1", 200.0)
+    plc.set("fTuneStabilisationZone1", 5.0)
+    plc.set("nModeZone1", TUNE)
+    for _ in range(round(600 / TS)):
+        plc.set("fPvZone1", plant.measure())
+        plc.scan()
+        plant.step(plc.get("fYZone1"))
+        if plc.get("nTuneStateZone1") in (4, 5):
+            break
+    assert plc.get("nStateZone1") == 6, plc.get("nErrorIdZone1")
+    assert plc.get("fTuZone1") == pytest.approx(5.5, rel=0.1)
+    assert plc.get("fTgZone1") == pytest.approx(140.0, rel=0.1)
+    assert plc.get("fKsZone1") == pytest.approx(3.4, rel=0.1)
+    assert plc.get("fKpZone1") == plc.get("fbZone1.sValid.fKp")
+    assert plc.get("nTuneRuleUsedZone1") == 3  # tau = 0.04: SIMC
+    plc.scan(5)
+    assert plc.get("fKpZone1") == plc.get("fbZone1.sValid.fKp")  # the register did not overwrite the result
+
+
+def test_raw_inputs_through_sensor_functions(plc: ScanDriver) -> None:
+    # zone 2: PT100 scaled 18.52 .. 390.48 ohm over 0 .. 32767 counts
+    plc.set("bUseRawZone2", True)
+    raw = round((cvd(37.0) - 18.52) / (390.48 - 18.52) * 32767)
+    plc.set("nPvRawZone2", raw)
+    plc.scan()
+    assert plc.get("fXUsedZone2") == pytest.approx(37.0, abs=0.2)  # one count = 0.03 degC
+    plc.set("nPvRawZone2", 32767)
+    plc.scan()
+    assert plc.get("dwAlarmZone2") & 0x1  # open
+    # zone 1: 100 k NTC (beta 3950) on a 4.7 k pull-up
+    r = 100e3 * math.exp(3950.0 * (1 / (210 + 273.15) - 1 / 298.15))
+    plc.set("bUseRawZone1", True)
+    plc.set("nPvRawZone1", round(32767 * r / (r + 4700.0)))
+    plc.scan()
+    assert plc.get("fXUsedZone1") == pytest.approx(210.0, abs=1.0)
+    plc.set("nPvRawZone1", 0)
+    plc.scan()
+    assert plc.get("dwAlarmZone1") & 0x40  # short
+
+
+def test_platform_zone_cools_with_negative_output(plc: ScanDriver) -> None:
+    plc.set("fPvZone2", 30.0)
+    plc.set("fSetpointZone2", 20.0)
+    plc.set("nModeZone2", ACTIVE)
+    plc.scan(30)
+    assert plc.get("fYZone2") < 0.0
+    cool_scans = 0
+    for _ in range(40):
+        plc.scan()
+        cool_scans += plc.get("bPwmCoolZone2")
+    assert cool_scans > 0
+    assert not plc.get("bPwmHeatZone2")
+
+
+def test_bundle_contains_app(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    out = tmp_path / "bundle.st"
+    proc = subprocess.run([sys.executable, "-m", "plc.cli", "bundle", "-o", str(out)], cwd=REPO_ROOT,
+                          capture_output=True, text=True, timeout=120)
+    if proc.returncode != 0:
+        pytest.skip(f"thermost bundle not usable here: {proc.stderr.strip()[:200]}")
+    text = out.read_text()
+    assert "PROGRAM P_ThermoST" in text and "CONFIGURATION Config0" in text
+    assert "FUNCTION_BLOCK FB_TempController" in text

@@ -107,6 +107,7 @@ class FileChecker:
         for finding in self.lexical.findings:
             self.report_offset(finding.offset, finding.message)
         self.text_rules()
+        self.missing_type_semicolon_rule()
         # a construct recognised above explains the parse error on its line: report it only once
         specific = {d.line for d in self.diagnostics}
         self.diagnostics.extend(d for d in self.ps.syntax_errors() if d.line not in specific)
@@ -152,6 +153,17 @@ class FileChecker:
                     "ARRAY OF STRUCT initializer [(x := ...), ...] is refused by MatIEC; "
                     "assign the elements in the body",
                 )
+
+    def missing_type_semicolon_rule(self) -> None:
+        """Rows end_type_semicolon / enum_no_semicolon: ';' after END_STRUCT or ')' inside TYPE."""
+        for node in descendants(self.ps.tree.root_node):
+            if node.is_missing and node.type == ";" and node.parent is not None:
+                if node.parent.type == "type_definition":
+                    self.report(
+                        node,
+                        "missing ';' at the end of the data type declaration (after END_STRUCT "
+                        "or the enumeration's ')')",
+                    )
 
     # ---- rules on single nodes anywhere --------------------------------------------------------
     def node_rules(self, node: Node) -> None:

@@ -51,7 +51,7 @@ def main_regmap(args: argparse.Namespace) -> int:
 def main_run(args: argparse.Namespace) -> int:
     from .loop import check_bindings
     from .report import slug, summary_rows, text_table, write_reports
-    from .runner import HarnessSetup, ProgressBar, parse_host_port, run_variants
+    from .runner import HarnessSetup, ProgressBar, parse_host_port, run_variants, run_variants_parallel
 
     t_start = time.perf_counter()
     try:
@@ -73,11 +73,14 @@ def main_run(args: argparse.Namespace) -> int:
     bar = ProgressBar(scenario.name)
     bar.enabled = not args.quiet
     try:
-        runs = asyncio.run(
-            run_variants(
-                scenario, setup, plc=args.plc, realtime=args.realtime, speed=args.speed, progress=bar
+        if args.plc or args.realtime:
+            runs = asyncio.run(
+                run_variants(
+                    scenario, setup, plc=args.plc, realtime=args.realtime, speed=args.speed, progress=bar
+                )
             )
-        )
+        else:  # embedded stepped soft-PLC: controller variants run side by side in parallel processes
+            runs = run_variants_parallel(scenario, setup, progress=bar)
     except RegisterMapError as exc:
         raise UserError(str(exc)) from None
     finally:

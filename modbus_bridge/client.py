@@ -21,6 +21,7 @@ from plc.runtime import control as ctl  # control block layout of the soft-PLC
 from .regmap import COIL, DISCRETE, HOLDING, INPUT, RegisterMap, Tag
 
 STEP_REGISTER = ctl.STEP
+RW_STEPS_REGISTER = ctl.RW_STEPS
 SCAN_COUNT_REGISTER = ctl.SCAN_COUNT
 MODE_REGISTER = ctl.MODE
 INTERVAL_NS_REGISTER = ctl.INTERVAL_NS
@@ -132,6 +133,8 @@ class PlcClient:
         self.timeout_s, self.retries, self.name = timeout_s, retries, name
         self._client: AsyncModbusTcpClient | None = None
         self._expected_scans: int | None = None
+        self._rw_steps = 0
+        self._plans: dict[tuple[str, ...], list[_Span]] = {}
         self.retried = 0
 
     async def __aenter__(self) -> PlcClient:
@@ -192,10 +195,16 @@ class PlcClient:
     async def write(self, name: str, value: float | int | bool) -> None:
         await self.write_tags({name: value})
 
+    def _plan(self, names: Iterable[str]) -> list[_Span]:
+        key = tuple(names)
+        plan = self._plans.get(key)
+        if plan is None:
+            plan = self._plans[key] = plan_reads([self.regmap[n] for n in key])
+        return plan
+
     async def read_tags(self, names: Iterable[str]) -> dict[str, float | int | bool]:
-        tags = [self.regmap[n] for n in names]
         out: dict[str, float | int | bool] = {}
-        for span in plan_reads(tags):
+        for span in self._plan(names):
             values = await self._read_span(span)
             self._unpack(span, values, out)
         return out
@@ -220,8 +229,9 @@ class PlcClient:
             off = t.address - span.start
             out[t.name] = bool(values[off]) if t.is_bit else decode(t, values[off : off + t.words])
 
-    async def write_tags(self, values: Mapping[str, float | int | bool]) -> None:
-        """Contiguous holding registers go out in one FC16 request, coils in FC15 requests."""
+    def _encode_writes(
+        self, values: Mapping[str, float | int | bool]
+    ) -> tuple[dict[int, int], dict[int, bool]]:
         words: dict[int, int] = {}
         bits: dict[int, bool] = {}
         for name, value in values.items():
@@ -235,6 +245,11 @@ class PlcClient:
             else:
                 for k, w in enumerate(encode(tag, value)):
                     words[tag.address + k] = w
+        return words, bits
+
+    async def write_tags(self, values: Mapping[str, float | int | bool]) -> None:
+        """Contiguous holding registers go out in one FC16 request, coils in FC15 requests."""
+        words, bits = self._encode_writes(values)
         for start, block in _runs(words, MAX_WRITE_REGISTERS):
             await self._call(f"write of {len(block)} register(s) at {start}", "write_registers", start, block)
         for start, block in _runs(bits, MAX_READ_BITS):
@@ -266,16 +281,44 @@ class PlcClient:
         return raw.split(b"\0", 1)[0].decode("ascii", "replace")
 
     async def step(self, scans: int = 1) -> None:
-        """Run `scans` PLC scans (stepped soft-PLC)."""
-        await self._stepping(scans, None)
+        """Run `scans` PLC scans (stepped soft-PLC), through the STEP register."""
+        await self._stepping(scans, None, None)
 
     async def step_and_read(self, scans: int, names: Sequence[str]) -> dict[str, float | int | bool]:
-        """Step `scans` scans and read the named tags; holding-register tags come back in the same FC23
-        request when they fit in one span (the write executes before the read, docs/softplc.md)."""
-        spans = plan_reads([self.regmap[n] for n in names])
+        """Step `scans` scans, then read the named tags."""
+        return await self.exchange({}, scans, names)
+
+    async def exchange(
+        self, writes: Mapping[str, float | int | bool], scans: int, names: Sequence[str]
+    ) -> dict[str, float | int | bool]:
+        """One harness step on a stepped soft-PLC in as few requests as possible: coils and scattered
+        registers first (FC15/FC16), then ONE FC23 that writes the largest contiguous block of input
+        registers, runs `scans` scans (RW_STEPS, docs/internal-interfaces.md) and reads the first span
+        of outputs; other output spans are read after it."""
+        words, bits = self._encode_writes(writes)
+        runs = _runs(words, MAX_WRITE_REGISTERS)
+        block = max(runs, key=lambda r: len(r[1])) if runs else None
+        for start, values in runs:
+            if block is None or start != block[0]:
+                await self._call(
+                    f"write of {len(values)} register(s) at {start}", "write_registers", start, values
+                )
+        for start, values in _runs(bits, MAX_READ_BITS):
+            await self._call(f"write of {len(values)} coil(s) at {start}", "write_coils", start, values)
+        spans = self._plan(names)
         out: dict[str, float | int | bool] = {}
         first = spans[0] if spans and spans[0].table == HOLDING else None
-        registers = await self._stepping(scans, first)
+        if block is not None and first is not None:
+            if self._rw_steps != scans:
+                await self._call("set RW_STEPS", "write_register", RW_STEPS_REGISTER, scans)
+                self._rw_steps = scans
+            registers = await self._stepping(scans, first, block)
+        else:
+            if block is not None:
+                await self._call(
+                    f"write of {len(block[1])} register(s)", "write_registers", block[0], block[1]
+                )
+            registers = await self._stepping(scans, first, None)
         if first is not None:
             self._unpack(first, registers, out)
             spans = spans[1:]
@@ -283,16 +326,30 @@ class PlcClient:
             self._unpack(span, await self._read_span(span), out)
         return out
 
-    async def _stepping(self, scans: int, span: _Span | None) -> list[int]:
-        """A STEP is not idempotent: it is never retried blindly. The expected scan counter is kept;
-        after a lost reply the counter says how many scans really ran, and only the rest is requested."""
+    async def _stepping(self, scans: int, span: _Span | None, block: tuple[int, list] | None) -> list[int]:
+        """Scans are not idempotent: a step is never retried blindly. The expected scan counter is kept;
+        after a lost reply the counter says how many scans really ran, and only the rest is requested.
+        block given: FC23 writing it with RW_STEPS = scans; else the STEP register (FC6 when the RW_STEPS
+        mode is on, so scans are not doubled, else FC23 STEP + read)."""
         if self._expected_scans is None:
             self._expected_scans = await self.scan_count()
         target = self._expected_scans + scans
         remaining = scans
         for _attempt in range(self.retries + 1):
             try:
-                if span is None:
+                registers: list[int] = []
+                if block is not None and remaining == scans:
+                    reply = await self._call(
+                        f"write, {scans} scan(s) and read",
+                        "readwrite_registers",
+                        read_address=span.start,
+                        read_count=span.count,
+                        write_address=block[0],
+                        values=block[1],
+                        retry=False,
+                    )
+                    registers = list(reply.registers)
+                elif span is None or self._rw_steps:
                     await self._call(
                         f"step of {remaining} scan(s)",
                         "write_register",
@@ -300,7 +357,8 @@ class PlcClient:
                         remaining,
                         retry=False,
                     )
-                    registers: list[int] = []
+                    if span is not None:
+                        registers = await self._read_span(span)
                 else:
                     reply = await self._call(
                         f"step of {remaining} scan(s) with read",
@@ -326,9 +384,7 @@ class PlcClient:
                 remaining = target - done_now
                 if remaining <= 0:
                     self._expected_scans = done_now
-                    if span is None:
-                        return []
-                    return await self._read_span(span)
+                    return [] if span is None else await self._read_span(span)
         raise PlcError(f"{self.where} stopped answering (step of {scans} scan(s))")
 
 

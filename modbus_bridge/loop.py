@@ -25,6 +25,8 @@ from .scenario import Phase, Scenario, Variant, Zone
 from .sensors import Sensor
 
 PERCENT = 100.0
+GAIN_ROLES = ("kp_eff", "tn_eff", "tv_eff", "kp", "tn", "tv", "ks", "tu", "tg")
+GAIN_READ_EVERY = 10  # plant steps between reads of gains and identified plant (1 s at dt = 0.1 s)
 SECONDS_PER_MINUTE = 60.0
 
 
@@ -149,7 +151,9 @@ class ZoneSequencer:
     def start(self, t: float, pv: float, writes: dict) -> None:
         self._enter(t, pv, writes)
 
-    def update(self, t: float, dt: float, pv: float, state: int | None, writes: dict) -> None:
+    def update(
+        self, t: float, dt: float, pv: float, state: int | None, writes: dict, error_id: int | None = None
+    ) -> None:
         """Called once per plant step before the PLC scans: phase changes, ramps, disturbances."""
         if self.finished:
             return
@@ -161,7 +165,7 @@ class ZoneSequencer:
             if state == self.codes.states.get("TUNED"):
                 done = True
             elif state == self.codes.states.get("ERROR"):
-                rec.outcome = "tuning error"
+                rec.outcome = "tuning error" if error_id is None else f"tuning error {error_id}"
                 rec.t_end = t
                 self.finished = True
                 return
@@ -276,19 +280,20 @@ async def close_loop(
     dt = scenario.dt_s
     horizon = max_plant_time_s or scenario.nominal_duration_s
     read_names: list[str] = []
+    slow_names: list[str] = []  # gains and identified plant: read every GAIN_READ_EVERY steps and on changes
     for z in scenario.zones:
         b = bindings[z.plc_zone]
-        read_names += [b["state"]]
+        read_names += [b["state"]] + ([b["error"]] if b.has("error") else [])
         read_names += (
             [b["pwm_heat"]] + ([b["pwm_cool"]] if b.has("pwm_cool") else [])
             if scenario.output_path == "pwm"
             else [b["y"]]
         )
-        read_names += [
-            b[r] for r in ("kp_eff", "tn_eff", "tv_eff", "kp", "tn", "tv", "ks", "tu", "tg") if b.has(r)
-        ]
+        slow_names += [b[r] for r in GAIN_ROLES if b.has(r)]
+    slow_values: dict = {}
     u = [0.0] * plant.channels
     states: list[int | None] = [None] * len(seqs)
+    error_ids: list[int | None] = [None] * len(seqs)
     wall0 = time.perf_counter()
     plant_cpu = 0.0
     k = 0
@@ -315,7 +320,7 @@ async def close_loop(
             for i, (z, s, seq) in enumerate(zip(scenario.zones, sensors, seqs, strict=True)):
                 pv = s.measure(temps[z.channel], dt if k else 0.0)
                 measured.append(pv)
-                seq.update(t, dt, pv, states[i], writes)
+                seq.update(t, dt, pv, states[i], writes, error_ids[i])
                 b = seq.binding
                 if scenario.pv_path == "raw":
                     writes[b["pv_raw"]] = s.last_counts
@@ -332,11 +337,14 @@ async def close_loop(
                 await client.write_tags(writes)
                 values = await client.read_tags(read_names)
             else:
-                await client.write_tags(writes)
-                values = await client.step_and_read(scenario.scans_per_step, read_names)
+                values = await client.exchange(writes, scenario.scans_per_step, read_names)
+            new_states = [int(values[seq.binding["state"]]) for seq in seqs]
+            if slow_names and (k % GAIN_READ_EVERY == 0 or new_states != states):
+                slow_values = await client.read_tags(slow_names)
             for i, (z, seq, tr) in enumerate(zip(scenario.zones, seqs, traces, strict=True)):
                 b = seq.binding
-                states[i] = int(values[b["state"]])
+                states[i] = new_states[i]
+                error_ids[i] = int(values[b["error"]]) if b.has("error") else None
                 if scenario.output_path == "pwm":
                     heat = bool(values[b["pwm_heat"]])
                     cool = bool(values[b["pwm_cool"]]) if b.has("pwm_cool") else False
@@ -351,14 +359,14 @@ async def close_loop(
                 tr.u.append(u[z.channel])
                 tr.state.append(states[i])
                 tr.phase.append(seq.phase.name if not seq.finished else "")
-                for role in ("kp_eff", "tn_eff", "tv_eff", "kp", "tn", "tv", "ks", "tu", "tg"):
+                for role in GAIN_ROLES:
                     if b.has(role):
-                        tr.gains.setdefault(role, []).append(float(values[b[role]]))
+                        tr.gains.setdefault(role, []).append(float(slow_values[b[role]]))
                 if seq.trace.phases and not seq.finished:
                     rec = seq.trace.phases[-1]
                     for role in ("kp", "tn", "tv", "ks", "tu", "tg"):
                         if b.has(role):
-                            rec.tuned[role] = float(values[b[role]])
+                            rec.tuned[role] = float(slow_values[b[role]])
             c0 = time.perf_counter()
             plant.step(u, dt, pdist)
             plant_cpu += time.perf_counter() - c0

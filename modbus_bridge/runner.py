@@ -141,3 +141,71 @@ class ProgressBar:
         if self.enabled:
             self.stream.write("\n")
             self.stream.flush()
+
+
+def _child_run(scenario: Scenario, setup: HarnessSetup, index: int, queue, kwargs: dict) -> None:
+    """One variant in a forked process; progress and the result (or the exception) go through `queue`."""
+    import dataclasses
+
+    def progress(done: float, total: float) -> None:
+        queue.put(("progress", index, done, total))
+
+    try:
+        single = dataclasses.replace(scenario, variants=[scenario.variants[index]])
+        runs = asyncio.run(run_variants(single, setup, progress=progress, **kwargs))
+        queue.put(("result", index, runs[0]))
+    except BaseException as exc:  # noqa: BLE001 - handed to the parent, which re-raises it
+        queue.put(("error", index, exc))
+
+
+def run_variants_parallel(
+    scenario: Scenario,
+    setup: HarnessSetup,
+    *,
+    progress: ProgressFn | None = None,
+    max_plant_time_s: float | None = None,
+) -> list[tuple[RunResult, list[PhaseMetrics]]]:
+    """Variants on the embedded stepped soft-PLC, one forked process each (they share nothing: every
+    process loads its own soft-PLC), so a side-by-side comparison costs the wall time of one run on a
+    multi-core machine. Falls back to sequential runs where fork is unavailable."""
+    import multiprocessing as mp
+
+    if len(scenario.variants) < 2 or "fork" not in mp.get_all_start_methods():
+        return asyncio.run(
+            run_variants(scenario, setup, progress=progress, max_plant_time_s=max_plant_time_s)
+        )
+    setup.program_text()  # bundle once, before forking
+    ctx = mp.get_context("fork")
+    queue = ctx.Queue()
+    kwargs = {"max_plant_time_s": max_plant_time_s}
+    procs = [
+        ctx.Process(target=_child_run, args=(scenario, setup, i, queue, kwargs), daemon=True)
+        for i in range(len(scenario.variants))
+    ]
+    t0 = time.perf_counter()
+    for p in procs:
+        p.start()
+    results: dict[int, tuple[RunResult, list[PhaseMetrics]]] = {}
+    done = [0.0] * len(procs)
+    total = [0.0] * len(procs)
+    error: BaseException | None = None
+    try:
+        while len(results) + (error is not None) < len(procs) and error is None:
+            kind, index, *payload = queue.get()
+            if kind == "progress":
+                done[index], total[index] = payload
+                if progress is not None:
+                    progress(sum(done), sum(total))
+            elif kind == "result":
+                results[index] = payload[0]
+            else:
+                error = payload[0]
+    finally:
+        for p in procs:
+            p.join(timeout=0.5 if error is None else 0.0)
+            if p.is_alive():
+                p.terminate()
+    if error is not None:
+        raise error
+    setup.startup_s = time.perf_counter() - t0 - max(r.wall_s for r, _ in results.values())
+    return [results[i] for i in range(len(procs))]

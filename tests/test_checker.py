@@ -182,3 +182,64 @@ def test_agrees_with_the_soft_plc_typer_on_its_type_error_file() -> None:
     ours = {(d.line, d.col) for d in check_sources(sources)}
     theirs = {(d.line, d.col) for d in compiler.typecheck(sources)}
     assert theirs and ours == theirs
+
+
+LITERAL_REAL = re.compile(r"(?<![\w.#])(?<!#-)(\d+)\.0(?![\w])")
+INT_TO_REAL_CALL = re.compile(r"\b(?:SINT|INT|DINT|UINT|UDINT|LINT)_TO_L?REAL\(")
+REAL_CONVERSION_CALL = re.compile(
+    r"\b(?:REAL_TO_LREAL|LREAL_TO_REAL|L?REAL_TO_(?:SINT|INT|DINT|LINT|UINT|UDINT))\("
+)
+
+
+def _mutants(text: str, code: list[bool]) -> dict[str, list[tuple[int, str]]]:
+    """(line, mutated text) per kind of seeded type error."""
+    out: dict[str, list[tuple[int, str]]] = {"real literal written as integer": [], "conversion dropped": []}
+    for m in LITERAL_REAL.finditer(text):
+        if code[m.start()]:
+            out["real literal written as integer"].append(
+                (text.count("\n", 0, m.start()) + 1, text[: m.start()] + m.group(1) + text[m.end() :])
+            )
+    for pattern in (INT_TO_REAL_CALL, REAL_CONVERSION_CALL):
+        for m in pattern.finditer(text):
+            if code[m.start()]:
+                out["conversion dropped"].append(
+                    (text.count("\n", 0, m.start()) + 1, text[: m.start()] + "(" + text[m.end() :])
+                )
+    return out
+
+
+ALL_LITERAL_CALL = re.compile(r"^\s*\w+\s*:=\s*\w+\((?P<args>[^()]*)\);")
+
+
+def _all_literal_call(line: str) -> bool:
+    m = ALL_LITERAL_CALL.match(line)
+    return bool(m) and not re.search(r"[A-Za-z_]", re.sub(r"\b(?:TRUE|FALSE)\b", "", m["args"]))
+
+
+def test_seeded_type_errors_in_the_corpus_are_found() -> None:
+    """Mutation check: seeded MatIEC type errors in known-good programs are reported on their line.
+
+    Every dropped conversion must be found; an integer written for a real literal may be missed only
+    in a call whose arguments are all literals (MAX(1, 10.0)): no operand has a declared type and the
+    typer deliberately does not judge literal against literal."""
+    from plc.checker.lexical import scan
+
+    shared = shared_dir()
+    if shared is None:
+        pytest.skip("shared/conformance not found (set THERMOST_SHARED)")
+    counts: dict[str, list[int]] = {}
+    unexplained: list[str] = []
+    for path in sorted((shared / "conformance").glob("*.st"))[::2]:  # half the corpus keeps it fast
+        text = path.read_text(encoding="utf-8")
+        for kind, mutants in _mutants(text, scan(text).code).items():
+            for line, mutated in mutants:
+                hit = any(d.line == line for d in check_sources([(path.name, mutated)]))
+                counts.setdefault(kind, [0, 0])
+                counts[kind][0] += hit
+                counts[kind][1] += 1
+                source_line = mutated.splitlines()[line - 1]
+                if not hit and (kind == "conversion dropped" or not _all_literal_call(source_line)):
+                    unexplained.append(f"{path.name}:{line}: {kind}: {source_line.strip()}")
+    print("seeded type errors (found, seeded):", counts)
+    assert counts["conversion dropped"][1] > 10 and counts["real literal written as integer"][1] > 30
+    assert not unexplained, "\n".join(unexplained)

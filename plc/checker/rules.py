@@ -18,12 +18,13 @@ from plc.checker.symbols import (
     ArrayT,
     Pou,
     Symbols,
+    TypeT,
     block_qualifiers,
     block_variables,
     type_of,
     var_blocks,
 )
-from plc.checker.typing_rules import ExpressionTyper
+from plc.checker.typing_rules import ExpressionTyper, compatibility
 from plc.checker.vocabulary import (
     GENERIC_CONVERSIONS,
     TWINCAT_OPERATORS,
@@ -425,11 +426,7 @@ class FileChecker:
                 inits = decl.children_by_field_name("initial_value")
                 vtype = self.symbols.resolve(type_of(decl.child_by_field_name("type"), self.ps))
                 if len(inits) == 1 and isinstance(vtype, str):
-                    from plc.checker.typing_rules import compatibility
-
-                    why = compatibility(vtype, self.symbols.resolve(typer.type(inits[0])))
-                    if why:
-                        self.report(inits[0], f"incompatible initial value: {why}")
+                    self.initial_value_rule(typer, vtype, inits[0])
         for stmt in body:
             if stmt.has_error:
                 continue  # a statement the grammar could not parse is reported as a syntax error only
@@ -455,6 +452,21 @@ class FileChecker:
                     typer.type(node)
                 elif kind == "identifier":
                     self.global_use_rule(pou, node)
+
+    def initial_value_rule(self, typer: ExpressionTyper, vtype: TypeT, init: Node) -> None:
+        """Initial value against the declared type; named initialisers field by field."""
+        if init.type == "structure_initializer":
+            for fld in init.named_children:
+                name, value = fld.child_by_field_name("name"), fld.child_by_field_name("value")
+                if fld.type != "structure_initializer_field" or name is None or value is None:
+                    continue
+                ftype = self.symbols.resolve(typer.member_type(vtype, self.ps.node_text(name)))
+                if isinstance(ftype, str):
+                    self.initial_value_rule(typer, ftype, value)
+            return
+        why = compatibility(vtype, self.symbols.resolve(typer.type(init)))
+        if why:
+            self.report(init, f"incompatible initial value: {why}")
 
     def undeclared_target_rule(self, pou: Pou, target: Node) -> None:
         name = self.ps.node_text(target).upper()

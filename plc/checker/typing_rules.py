@@ -232,6 +232,16 @@ class ExpressionTyper:
         if name in SAME_TYPE_FUNCTIONS:
             return arg_types[0] if arg_types else None
         if name in SELECTION_FUNCTIONS:
+            selected = [t for t in arg_types[SELECTION_FUNCTIONS[name]] if t is not None]
+            ints = [t for t in selected if _is_int(t)]
+            reals = [t for t in selected if _is_real(t)]
+            if ints and reals and not all(t in (ANY_INT, ANY_REAL) for t in selected):
+                self.report(
+                    node,
+                    f"data type mismatch in the arguments of {name}: "
+                    f"{', '.join(_describe(t) for t in selected)} (all must have one type)",
+                )
+                return None
             result: TypeT = None
             for i, t in enumerate(arg_types[SELECTION_FUNCTIONS[name]]):
                 result = t if i == 0 else _unify(result, t)

@@ -117,7 +117,7 @@ ZONES = [
     Zone(1, "nozzle (seed 000 / seed 002 hot end: heater only, 100 kOhm NTC on a divider)", "ntc",
          "fKp := 3.7, fTn := 44.0, fTv := 0.0, fTd := 0.0, fYMin := 0.0, fYMax := 100.0, fWMin := 0.0, "
          "fWMax := 300.0, fYTune := 60.0, fTempAbsHigh := 290.0, fTempAbsLow := -20.0, fXMin := -30.0, "
-         "fXMax := 320.0, fPwmPeriod := 1.0, fWatchPeriod := 20.0, fRunawayPeriod := 40.0",
+         "fXMax := 320.0, fPwmPeriod := 1.0, fWatchPeriod := 45.0, fRunawayPeriod := 40.0",
          [("fNtcR25", 100000.0, "NTC resistance at 25 degC, ohm"),
           ("fNtcBeta", 3950.0, "NTC beta, K"),
           ("fRPullup", 4700.0, "divider pull-up, ohm")]),

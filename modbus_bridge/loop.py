@@ -58,6 +58,7 @@ class ZoneTrace:
     u: list[float] = field(default_factory=list)  # controller output applied to the plant, %
     pwm: list[int] = field(default_factory=list)
     state: list[int] = field(default_factory=list)
+    alarm: list[int] = field(default_factory=list)
     phase: list[str] = field(default_factory=list)
     gains: dict[str, list[float]] = field(default_factory=dict)
     phases: list[PhaseRecord] = field(default_factory=list)
@@ -283,7 +284,7 @@ async def close_loop(
     slow_names: list[str] = []  # gains and identified plant: read every GAIN_READ_EVERY steps and on changes
     for z in scenario.zones:
         b = bindings[z.plc_zone]
-        read_names += [b["state"]] + ([b["error"]] if b.has("error") else [])
+        read_names += [b["state"]] + [b[r] for r in ("error", "alarm") if b.has(r)]
         read_names += (
             [b["pwm_heat"]] + ([b["pwm_cool"]] if b.has("pwm_cool") else [])
             if scenario.output_path == "pwm"
@@ -358,6 +359,8 @@ async def close_loop(
                 tr.setpoint.append(seq.setpoint)
                 tr.u.append(u[z.channel])
                 tr.state.append(states[i])
+                if b.has("alarm"):
+                    tr.alarm.append(int(values[b["alarm"]]))
                 tr.phase.append(seq.phase.name if not seq.finished else "")
                 for role in GAIN_ROLES:
                     if b.has(role):

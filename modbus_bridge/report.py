@@ -64,6 +64,7 @@ def write_csv(result: RunResult, path: Path) -> None:
                 "output_pct",
                 "pwm",
                 "state",
+                "alarm",
                 *gain_roles,
             ]
         )
@@ -79,6 +80,7 @@ def write_csv(result: RunResult, path: Path) -> None:
                     f"{tr.u[i]:.4f}",
                     tr.pwm[i] if tr.pwm else "",
                     tr.state[i],
+                    f"0x{tr.alarm[i]:08X}" if tr.alarm else "",
                 ]
                 row += [f"{tr.gains[r][i]:.6g}" if r in tr.gains else "" for r in gain_roles]
                 w.writerow(row)

@@ -60,10 +60,14 @@ BODY = """  IF bPrepare THEN
   END_IF;"""
 
 
+def make_inference_driver() -> ScanDriver:
+    """A soft-PLC program around one FB_FuzzyInference, configured through prepare()."""
+    return ScanDriver(load_test_app(build_program(DECLS, BODY), extra=fuzzy_sources()))
+
+
 @pytest.fixture(scope="module")
 def drv() -> ScanDriver:
-    app = load_test_app(build_program(DECLS, BODY), extra=fuzzy_sources())
-    return ScanDriver(app)
+    return make_inference_driver()
 
 
 def prepare(drv: ScanDriver, cfg: FuzzyConfig) -> None:

@@ -156,3 +156,13 @@ def test_bundle_contains_app(tmp_path: Path) -> None:
     text = out.read_text()
     assert "PROGRAM P_ThermoST" in text and "CONFIGURATION Config0" in text
     assert "FUNCTION_BLOCK FB_TempController" in text
+
+
+def test_raw_counts_from_modbus_register(plc: ScanDriver) -> None:
+    plc.set("bUseRawZone2", True)
+    plc.set("bRawFromModbusZone2", True)
+    plc.set("nPvRawZone2", 0)  # the hardware input would read as a short
+    plc.set("nPvRawModbusZone2", round((cvd(4.0) - 18.52) / (390.48 - 18.52) * 32767))
+    plc.scan()
+    assert plc.get("fXUsedZone2") == pytest.approx(4.0, abs=0.2)
+    assert not plc.get("dwAlarmZone2") & 0x40

@@ -170,6 +170,7 @@ def zone_decls(z: Zone) -> tuple[list[str], list[str]]:
     add("nReaction", f"%MW{mw + 6}", "INT", "reaction on failure: 0 NONE 1 OFF 2 FAILVALUE 3 HOLD")
     add("nRawShort", f"%MW{mw + 7}", "INT", "raw count at or below: sensor short")
     add("nRawOpen", f"%MW{mw + 8}", "INT", "raw count at or above: sensor open")
+    add("nPvRawModbus", f"%MW{mw + 9}", "INT", "raw counts written by a Modbus client (coil bRawFromModbus)")
     add("nPvRaw", f"%IW{n - 1}", "INT", "raw analog input, counts 0 .. 32767")
     q = n - 1
     add("bPwmHeat", f"%QX{q}.0", "BOOL", "heating PWM output")
@@ -183,9 +184,10 @@ def zone_decls(z: Zone) -> tuple[list[str], list[str]]:
     add("bError", f"%QX{q + 2}.0", "BOOL", "controller error (state ERROR)")
     add("bAlarmLatch", f"%QX{q + 2}.1", "BOOL", "alarms latch until acknowledged")
     add("bARWOnIPartOnly", f"%QX{q + 2}.2", "BOOL", "anti-windup clamps only the I part")
+    add("bRawFromModbus", f"%QX{q + 2}.3", "BOOL", "bUseRaw: counts from nPvRawModbus, not %IW")
     md_end, mw_end = md + MD_ZONE_STRIDE - 1, mw + MW_ZONE_STRIDE - 1
-    loc.append(f"    (* zone {n}: %MD{md + idx}..%MD{md_end}, %MW{mw + 9}..%MW{mw_end}, "
-               f"%QX{q + 2}.3..%QX{q + 2}.7 free *)")
+    loc.append(f"    (* zone {n}: %MD{md + idx}..%MD{md_end}, %MW{mw + 10}..%MW{mw_end}, "
+               f"%QX{q + 2}.4..%QX{q + 2}.7 free *)")
 
     internal = [
         f"    sParZone{n} : ST_ControllerParameter := ({z.defaults});",
@@ -193,6 +195,7 @@ def zone_decls(z: Zone) -> tuple[list[str], list[str]]:
         f"    eModeZone{n} : E_CtrlMode := eCTRL_MODE_IDLE;",
         f"    fXZone{n} : REAL;",
         f"    fResZone{n} : REAL;",
+        f"    nRawZone{n} : INT;",
         f"    bRawOpenZone{n} : BOOL;",
         f"    bRawShortZone{n} : BOOL;",
         f"    bRejectedZone{n} : BOOL;",
@@ -201,6 +204,17 @@ def zone_decls(z: Zone) -> tuple[list[str], list[str]]:
     for suffix, _f, typ, _c in PARAMS:
         internal.append(f"    {suffix}PrevZone{n} : {typ};")
     return loc, internal
+
+
+def fuzzy_decls(z: Zone) -> tuple[list[str], list[str]]:
+    """Hook for the fuzzy gain adapter (helper 'fuzzy'): (located declarations in %MD200..%MD299 /
+    %QX4.0..%QX4.7, internal declarations) of zone z. Empty until the adapter is wired in."""
+    return [], []
+
+
+def fuzzy_body(z: Zone) -> list[str]:
+    """Hook for the fuzzy gain adapter: ST lines run before zone z's controller call."""
+    return []
 
 
 def zone_init(z: Zone) -> list[str]:
@@ -248,12 +262,17 @@ def zone_body(z: Zone) -> list[str]:
         f"  bRawOpenZone{n} := FALSE;",
         f"  bRawShortZone{n} := FALSE;",
         f"  IF bUseRawZone{n} THEN",
-        f"    bRawOpenZone{n} := nPvRawZone{n} >= nRawOpenZone{n};",
-        f"    bRawShortZone{n} := nPvRawZone{n} <= nRawShortZone{n};",
+        f"    IF bRawFromModbusZone{n} THEN",
+        f"      nRawZone{n} := nPvRawModbusZone{n};",
+        "    ELSE",
+        f"      nRawZone{n} := nPvRawZone{n};",
+        "    END_IF;",
+        f"    bRawOpenZone{n} := nRawZone{n} >= nRawOpenZone{n};",
+        f"    bRawShortZone{n} := nRawZone{n} <= nRawShortZone{n};",
     ]
     if z.sensor == "ntc":
         b += [
-            f"    fResZone{n} := FC_NtcDividerResistance(nRaw := nPvRawZone{n}, nRawFull := nRawFullScale,"
+            f"    fResZone{n} := FC_NtcDividerResistance(nRaw := nRawZone{n}, nRawFull := nRawFullScale,"
             f" fRPullup := fRPullupZone{n}, fROpen := fROpenCircuit);",
             f"    IF fResZone{n} > 0.0 THEN",
             f"      fXZone{n} := FC_NtcBetaToTemp(fResistance := fResZone{n}, fR25 := fNtcR25Zone{n},"
@@ -265,7 +284,7 @@ def zone_body(z: Zone) -> list[str]:
         ]
     else:
         b += [
-            f"    fResZone{n} := FC_ScaleRaw(nRaw := nPvRawZone{n}, nRawLow := 0, nRawHigh := nRawFullScale,"
+            f"    fResZone{n} := FC_ScaleRaw(nRaw := nRawZone{n}, nRawLow := 0, nRawHigh := nRawFullScale,"
             f" fLow := fRawResLowZone{n}, fHigh := fRawResHighZone{n});",
             f"    fXZone{n} := FC_Pt100ToTemp(fResistance := fResZone{n}, fR0 := fPt100R0Zone{n});",
         ]
@@ -275,6 +294,7 @@ def zone_body(z: Zone) -> list[str]:
         "  END_IF;",
         "",
         f"  (* fuzzy adapter of zone {n} goes here (before the controller call), see the reserved block *)",
+        *fuzzy_body(z),
         "",
         f"  fbZone{n}(eCtrlMode := eModeZone{n}, bSelSetpoint := bSelSetpointZone{n},",
         f"           fW1 := fSetpointZone{n},",
@@ -319,8 +339,15 @@ def generate() -> str:
         out += loc
         out.append("  END_VAR")
         internal_all += internal
+    fuzzy_loc: list[str] = []
+    for z in ZONES:
+        loc, internal = fuzzy_decls(z)
+        fuzzy_loc += loc
+        internal_all += internal
+    out.append("  (* fuzzy adapter registers: %MD200..%MD299 and %QX4.0..%QX4.7 (helper fuzzy) *)")
+    if fuzzy_loc:
+        out += ["  VAR", *fuzzy_loc, "  END_VAR"]
     out += [
-        "  (* fuzzy adapter registers: %MD200..%MD299 and %QX4.0..%QX4.7 -- reserved, keep free *)",
         "  VAR",
         "    bInitDone : BOOL;",
     ]

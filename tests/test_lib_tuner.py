@@ -266,3 +266,32 @@ def test_noisy_measurement_still_identified(uut, seed) -> None:
     assert got["fKs"] == pytest.approx(3.4, rel=0.10)
     assert got["fTu"] == pytest.approx(5.5, rel=0.10)
     assert got["fTg"] == pytest.approx(140.0, rel=0.10)
+
+
+def test_negative_step_tunes_the_cooling_set(uut) -> None:
+    uut.set("sPar.fYMin", -100.0)
+    uut.set("sPar.fTempAbsLow", -100.0)
+    heat_before = [uut.get(f"sPar.{n}") for n in ("fKp", "fTn", "fTv", "fTd")]
+    plant = Fopdt(k=0.8, t=80.0, l=8.0, x0=30.0)
+    run_tune(uut, plant, w=0.0, y_tune=-50.0, rule=RULE_SIMC)
+    assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
+    got = identified(uut)
+    assert got["fKs"] == pytest.approx(0.8, rel=0.10)
+    assert got["fTu"] == pytest.approx(8.0, rel=0.10)
+    assert got["fTg"] == pytest.approx(80.0, rel=0.10)
+    cool = [uut.get(f"sPar.{n}") for n in ("fKpCool", "fTnCool", "fTvCool", "fTdCool")]
+    want = rule_values(RULE_SIMC, got["fKs"], got["fTu"], got["fTg"], got["fVmax"], 50.0)
+    assert cool == pytest.approx(want, rel=1e-3, abs=1e-6)
+    assert [uut.get(f"sPar.{n}") for n in ("fKp", "fTn", "fTv", "fTd")] == heat_before
+
+
+def test_tuning_error_bit_clears_after_leaving_tune_and_ack(uut) -> None:
+    run_tune(uut, Fopdt(k=1.0, t=50.0, l=5.0), w=10.0)
+    assert error_of(uut) == 15
+    uut.set("nMode", 1)
+    uut.scan()
+    assert uut.get("fbUut.dwAlarm") & 0x20000  # latched
+    uut.set("fbUut.bAckAlarm", True)
+    uut.scan()
+    assert not uut.get("fbUut.dwAlarm") & 0x20000
+    assert uut.get("nState") == 1 and uut.get("fbUut.nErrorId") == 0

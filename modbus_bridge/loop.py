@@ -313,7 +313,7 @@ async def close_loop(
             await client.write_tags(writes)
         while not all(seq.finished for seq in seqs):
             t = k * dt
-            if t >= horizon + 1e-9:
+            if t >= horizon - 1e-9:
                 break
             writes = {}
             temps = plant.temperatures()

@@ -209,3 +209,35 @@ def run_variants_parallel(
         raise error
     setup.startup_s = time.perf_counter() - t0 - max(r.wall_s for r, _ in results.values())
     return [results[i] for i in range(len(procs))]
+
+
+@dataclass
+class FleetJob:
+    """One scenario variant on one PLC (HOST:PORT), for `run_fleet`."""
+
+    scenario: Scenario
+    plc: str
+    variant_index: int = 0
+
+
+async def run_fleet(jobs: list[FleetJob], setup: HarnessSetup, *, speed: float = 1.0) -> list[RunResult]:
+    """Several PLCs at once on one event loop: one connection per PLC, each job closes its own loop
+    (stepped when the PLC offers the soft-PLC control block, else real time)."""
+
+    async def one(job: FleetJob) -> RunResult:
+        host, port = parse_host_port(job.plc)
+        bindings = setup.bindings(job.scenario)
+        async with PlcClient(host, port, setup.regmap, name=f"PLC {job.plc}") as client:
+            stepped = await client.stepped()
+            await _reset_controllers(client, bindings, setup.codes, stepped)
+            return await close_loop(
+                job.scenario,
+                job.scenario.variants[job.variant_index],
+                client,
+                bindings,
+                setup.codes,
+                realtime=not stepped,
+                speed=speed,
+            )
+
+    return list(await asyncio.gather(*(one(j) for j in jobs)))

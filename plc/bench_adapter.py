@@ -1,0 +1,98 @@
+"""Scan cost of FB_FuzzyGainAdapter in the soft-PLC (`thermost bench` calls `run(quick)`).
+
+One PROGRAM per mode calls the adapter once per scan with a moving actual value (so E and EC sweep
+the universe); the same program without the adapter call is the baseline that is subtracted. Printed
+per mode: microseconds per adapter call and its share of a 10 ms cycle, in the soft-PLC (a Python
+interpreter of the ST; a compiled PLC is one to two orders of magnitude faster).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+ST_LIB = ROOT / "st_lib"
+EXCLUDED = ("shim/twincat/",)
+CYCLE_BUDGET_US = 10_000.0  # a 10 ms PLC cycle
+SCANS_FULL = 2000
+SCANS_QUICK = 300
+WARMUP_SCANS = 120  # > query-table build time (169 nodes / 4 per cycle)
+
+
+@dataclass(frozen=True)
+class Mode:
+    label: str
+    settings: str  # ST statements run once before the first adapter call
+
+
+MODES = (
+    Mode("rule inference, triangular, centroid (61 pts)", ""),
+    Mode("rule inference, Gaussian, centroid (all 49 rules fire)", "sFz.eMembership := eFUZZY_MF_GAUSSIAN;"),
+    Mode("rule inference, mixed (seed 003, U = 4), centroid",
+         "sFz.eMembership := eFUZZY_MF_MIXED; sFz.fUniverse := 4.0;"),
+    Mode("rule inference, triangular, weighted average", "sFz.eDefuzz := eFUZZY_DEFUZZ_WEIGHTED;"),
+    Mode("query table (13x13, bilinear) + explain", "sFz.bQueryTable := TRUE;"),
+    Mode("query table (13x13, bilinear), no explain",
+         "sFz.bQueryTable := TRUE; sFz.bExplainInQueryMode := FALSE;"),
+)
+
+
+def library_sources() -> list[tuple[str, str]]:
+    out = []
+    for path in sorted(ST_LIB.rglob("*.st")):
+        rel = path.relative_to(ST_LIB).as_posix()
+        if not any(rel.startswith(x) for x in EXCLUDED):
+            out.append((str(path.relative_to(ROOT)), path.read_text()))
+    return out
+
+
+def program(settings: str, with_adapter: bool) -> str:
+    call = ("  fbAd(bEnable := TRUE, fW := 60.0, fX := fX, sCtrlParam := sCtrl, sFuzzyParam := sFz);\n"
+            if with_adapter else "")
+    return (
+        "PROGRAM P_Bench\n  VAR\n    sCtrl : ST_ControllerParameter;\n    sFz : ST_FuzzyParameter;\n"
+        "    fbAd : FB_FuzzyGainAdapter;\n    bInit : BOOL;\n    bOk : BOOL;\n    fX : REAL := 59.0;\n"
+        "    fPhase : REAL;\n  END_VAR\n"
+        "  IF NOT bInit THEN\n"
+        "    bOk := FC_FuzzyLoadPreset(ePreset := eFUZZY_PRESET_TEXTBOOK, sRules := sFz.sRules);\n"
+        f"    {settings}\n    bInit := TRUE;\n  END_IF;\n"
+        "  fPhase := fPhase + 0.01;\n  fX := 60.0 - 0.6 * SIN(fPhase);\n"
+        f"{call}END_PROGRAM\n\n"
+        "CONFIGURATION Config0\n  RESOURCE Res0 ON PLC\n"
+        "    TASK task0(INTERVAL := T#10ms, PRIORITY := 0);\n    PROGRAM inst0 WITH task0 : P_Bench;\n"
+        "  END_RESOURCE\nEND_CONFIGURATION\n"
+    )
+
+
+def time_scans(text: str, scans: int) -> tuple[float, object]:
+    from plc.st.compiler import load_application
+
+    app = load_application(library_sources() + [("bench_adapter.st", text)])
+    for _ in range(WARMUP_SCANS):
+        app.scan()
+    start = time.perf_counter()
+    for _ in range(scans):
+        app.scan()
+    return (time.perf_counter() - start) / scans * 1e6, app
+
+
+def run(quick: bool) -> None:
+    scans = SCANS_QUICK if quick else SCANS_FULL
+    print(f"FB_FuzzyGainAdapter scan cost in the soft-PLC ({scans} scans per mode, baseline subtracted)")
+    for mode in MODES:
+        try:
+            base_us, _ = time_scans(program(mode.settings, with_adapter=False), scans)
+            total_us, app = time_scans(program(mode.settings, with_adapter=True), scans)
+        except Exception as exc:  # noqa: BLE001 - a benchmark reports, it does not fail
+            print(f"  {mode.label}: not measured ({type(exc).__name__}: {exc})")
+            continue
+        cost = max(total_us - base_us, 0.0)
+        status = f"error {app.get('inst0.fbAd.nErrorId')}" if app.get("inst0.fbAd.bError") else "ok"
+        print(f"  {mode.label:<58} {cost:8.1f} us/call  ({cost / CYCLE_BUDGET_US * 100:5.2f} % of 10 ms)"
+              f"  [{status}]")
+
+
+if __name__ == "__main__":
+    run(quick=False)

@@ -147,3 +147,35 @@ def test_real_literal_is_double_until_stored():
     app.scan()
     assert app.get("inst0.eq_lit") is False
     assert app.get("inst0.eq_typed") is True
+
+
+def test_references_dates_strings_and_pragmas():
+    app = _prog(
+        """rX := REF(nX); bValid := rX <> NULL; nY := rX^;
+  sB := LEFT(CONCAT(sA, 'def'), 4);
+  {{ /* OpenPLC C pass-through: ignored by the soft-PLC */ }}
+  bLater := dStamp > D#2024-01-01;""",
+        """nX : INT := 3; nY : INT; rX : REF_TO INT; bValid : BOOL;
+    sA : STRING := 'abc'; sB : STRING; dStamp : DATE := D#2024-01-02; bLater : BOOL;""",
+    )
+    app.scan()
+    assert app.get("inst0.nY") == 3 and app.get("inst0.bValid") is True
+    assert app.get("inst0.sB") == "abcd"
+    assert app.get("inst0.bLater") is True
+    assert app.get("inst0.dStamp") == 1704153600 * 1_000_000_000
+
+
+def test_null_dereference_is_a_fault():
+    app = _prog("nY := rX^;", "nY : INT; rX : REF_TO INT;")
+    with pytest.raises(PlcRuntimeError):
+        app.scan()
+
+
+def test_unsupported_constructs_give_diagnostics_not_crashes():
+    cases = {
+        "FUNCTION F : VOID VAR_INPUT a : INT; END_VAR a := a; END_FUNCTION": "return type",
+        "PROGRAM P VAR t : LTIME; END_VAR t := t; END_PROGRAM": "not supported",
+    }
+    for text, needle in cases.items():
+        diags = typecheck([("x.st", text)])
+        assert diags and needle in diags[0].message, (text, diags)

@@ -8,6 +8,7 @@ the C type MatIEC's generated code gives it (for float/double and integer promot
 
 from __future__ import annotations
 
+import calendar
 import math
 import re
 from dataclasses import dataclass, field
@@ -75,6 +76,7 @@ class Pou:
     vars: dict[str, Var] = field(default_factory=dict)
     order: list[str] = field(default_factory=list)
     pyname: str = ""
+    failed: bool = False
 
     def params(self) -> list[Var]:
         return [self.vars[n] for n in self.order if self.vars[n].section in ("in", "inout")]
@@ -91,8 +93,11 @@ class Ex:
     const: object = None  # compile-time value for literals
 
 
+NULL_REF = Type("NULL", "ref")
+
+
 def _c_of(t: Type) -> str:
-    if t.kind in ("struct", "array", "fb", "string", "time"):
+    if t.kind in ("struct", "array", "fb", "string", "time", "ref"):
         return t.kind
     if t.kind == "bool":
         return "bool"
@@ -148,6 +153,8 @@ class Compiler:
                 elif t in ("function_declaration", "function_block_declaration", "program_declaration"):
                     kind = t.replace("_declaration", "")
                     name = src.node_text(node.child_by_field_name("name") or node.named_children[0]).upper()
+                    if name in self.pous and self.pous[name].node == node:
+                        continue  # declared by the globals pre-pass
                     if name in self.pous:
                         self.diags.append(src.diag(node, f"duplicate POU '{name}'"))
                         continue
@@ -164,6 +171,7 @@ class Compiler:
                 self.declare_pou(pou)
             except _Err as e:
                 self.diags.append(e.diag)
+                pou.failed = True
 
     # ------------------------------------------------------------------ types
     def resolve_named(self, name: str) -> Type:
@@ -184,6 +192,16 @@ class Compiler:
             raise KeyError(name)
         td, src = self.type_nodes[name]
         spec = td.named_children[1]
+        if spec.type in ("elementary_type", "identifier", "subrange_type"):
+            if name in self._resolving:
+                raise self.err(src, td, f"type '{name}' is defined in terms of itself")
+            self._resolving.add(name)
+            try:
+                base = self.type_from_spec(spec, src, name)
+            finally:
+                self._resolving.discard(name)
+            self.types[name] = base  # an alias / subrange is its base type for MatIEC's type rules
+            return base
         t = Type(name, "pending")
         self.types[name] = t
         built = self.type_from_spec(spec, src, name)
@@ -212,7 +230,15 @@ class Compiler:
     def type_from_spec(self, spec: Node, src: ParsedSource, name: str = "") -> Type:
         k = spec.type
         if k == "elementary_type":
-            return ELEMENTARY[src.node_text(spec).upper()]
+            tname = src.node_text(spec).upper()
+            if tname not in ELEMENTARY:
+                raise self.err(src, spec, f"data type {tname} is not supported by MatIEC / the soft-PLC")
+            return ELEMENTARY[tname]
+        if k == "reference_type":
+            target = self.type_from_spec(spec.named_children[-1], src)
+            return Type(f"REF_TO {target.name}", "ref", elem=target)
+        if k == "subrange_type":
+            return self.type_from_spec(spec.named_children[0], src)
         if k == "identifier":
             tn = src.node_text(spec).upper()
             try:
@@ -280,7 +306,11 @@ class Compiler:
     # ------------------------------------------------------------------ declarations
     def declare_vars(self, block: Node, src: ParsedSource, into: dict[str, Var], order: list[str]) -> None:
         section = SECTION_OF.get(block.type, "var")
-        constant = any(c.type == "CONSTANT" for c in block.children)
+        qualifiers = " ".join(
+            self_text.upper()
+            for self_text in (src.node_text(c) for c in block.children if c.type == "var_qualifier_list")
+        )
+        constant = "CONSTANT" in qualifiers.split() or any(c.type == "CONSTANT" for c in block.children)
         for decl in block.named_children:
             if decl.type != "variable_declaration":
                 continue
@@ -325,6 +355,13 @@ class Compiler:
         src = pou.src
         if pou.kind == "function":
             rt_node = pou.node.named_children[1]
+            if rt_node.type in SECTION_OF or src.node_text(rt_node).upper() == "VOID":
+                raise self.err(
+                    src,
+                    pou.node,
+                    f"FUNCTION '{pou.name}' needs a return type (VOID functions "
+                    "need iec2c -b, which OpenPLC does not pass)",
+                )
             pou.ret = self.type_from_spec(rt_node, src)
         for block in pou.node.named_children:
             if block.type in SECTION_OF:
@@ -383,6 +420,9 @@ class Compiler:
             return Ex(repr(ns), TIME, "time", ns)
         if k == "typed_literal":
             return self.typed_literal(node)
+        if k in ("date_literal", "time_of_day_literal", "date_and_time_literal"):
+            ns, tname = self.date_literal(src.node_text(node), node)
+            return Ex(repr(ns), ELEMENTARY[tname], "time", ns)
         if k in ("string_literal", "character_string"):
             text = src.node_text(node)
             return Ex(
@@ -396,6 +436,11 @@ class Compiler:
             return self.binary(node)
         if k == "call_expression":
             return self.call(node, expected)
+        if k == "dereference_expression":
+            r = self.expr(node.named_children[0])
+            if r.t.kind != "ref" or r.t.elem is None:
+                raise self.err(src, node, f"'^' applied to a value of type {r.t.name}")
+            return Ex(f"deref({r.code})", r.t.elem, _c_of(r.t.elem))
         if k == "member_access_expression":
             return self.member(node)
         if k == "index_expression":
@@ -423,6 +468,8 @@ class Compiler:
             return Ex(code, v.type, _c_of(v.type))
         if pou is not None and pou.kind == "function" and name.upper() == pou.name:
             return Ex("v__ret", pou.ret, _c_of(pou.ret))
+        if name == "null":
+            return Ex("None", NULL_REF, "ref")
         cands = self.enum_members.get(name.upper())
         if cands:
             et = cands[0]
@@ -453,6 +500,29 @@ class Compiler:
             raise self.err(self.src, node, f"invalid TIME literal '{text}'")
         ns = rt.time_literal_ns(sign, parts["ms"], parts["s"], parts["m"], parts["h"], parts["d"])
         return ns + sign * extra_ns
+
+    def date_literal(self, text: str, node: Node) -> tuple[int, str]:
+        """D#, TOD#, DT# literals as nanoseconds since 1970-01-01 (MatIEC's timespec epoch)."""
+        prefix, body = text.split("#", 1)
+        prefix = prefix.upper()
+        body = body.replace("_", "")
+        try:
+            if prefix in ("D", "DATE"):
+                y, m, d = (int(x) for x in body.split("-"))
+                return calendar.timegm((y, m, d, 0, 0, 0)) * rt.NS, "DATE"
+            if prefix in ("TOD", "TIME_OF_DAY"):
+                return self._tod_ns(body), "TIME_OF_DAY"
+            y, m, d, tod = body.split("-", 3)
+            return calendar.timegm((int(y), int(m), int(d), 0, 0, 0)) * rt.NS + self._tod_ns(
+                tod
+            ), "DATE_AND_TIME"
+        except ValueError:
+            raise self.err(self.src, node, f"invalid date/time literal '{text}'") from None
+
+    @staticmethod
+    def _tod_ns(body: str) -> int:
+        h, m, sec = body.split(":")
+        return rt.time_literal_ns(1, 0.0, float(sec), float(m), float(h), 0.0)
 
     def typed_literal(self, node: Node) -> Ex:
         src = self.src
@@ -592,6 +662,10 @@ class Compiler:
             c = self.common_c(a.c, b.c)
             return Ex(f"({self.to_c(a, c)} {BIT_OPS[op]} {self.to_c(b, c)})", t, c)
         if op in CMP_OPS:
+            if a.t.kind == "ref" or b.t.kind == "ref":
+                if op not in ("=", "<>") or a.t.kind != b.t.kind:
+                    raise self.err(src, node, f"'{op}' is not defined for {_tn(a.t)} and {_tn(b.t)}")
+                return Ex(f"({a.code} {'is' if op == '=' else 'is not'} {b.code})", BOOL, "bool")
             self.compare_types(a, b, op, node)
             a, b = self.literal_c(a, b), self.literal_c(b, a)
             if a.c in ("time", "str", "enum", "bool") or b.c in ("time", "str", "enum", "bool"):
@@ -844,6 +918,12 @@ class Compiler:
             raise self.err(
                 self.src, node, f"Incompatible data types for {what} operation (array shapes differ)"
             )
+        if dst.kind == "ref":
+            if src_t.kind == "ref" and (src_t.elem is None or src_t.elem.name == dst.elem.name):
+                return e.code
+            raise self.err(
+                self.src, node, f"Incompatible data types for {what} operation ({_tn(src_t)} to {dst.name})"
+            )
         if dst.kind == "string":
             if src_t.kind == "string":
                 return e.code
@@ -901,6 +981,13 @@ class Compiler:
             order = sorted(named)
             positional = positional + [named[k][0] for k in order]
         args = [self.expr(a) for a in positional]
+        if name == "REF":
+            if len(positional) != 1:
+                raise self.err(self.src, node, "REF takes one variable")
+            target = self.lvalue(positional[0])
+            return Ex(
+                f"Ref(lambda: {target.code})", Type(f"REF_TO {target.t.name}", "ref", elem=target.t), "ref"
+            )
         m = CONV_RE.match(name)
         if m and len(args) == 1:
             return self.conversion(m.group(1), m.group(2), args[0], node)
@@ -1044,7 +1131,22 @@ class Compiler:
             need(1)
             return Ex(f"len({args[0].code})", ELEMENTARY["INT"], "i32")
         if name == "CONCAT":
-            return Ex(" + ".join(a.code for a in args), STRING, "str")
+            return Ex("(" + " + ".join(a.code for a in args) + ")", STRING, "str")
+        if name in ("LEFT", "RIGHT"):
+            need(2)
+            s_, n_ = args
+            if name == "LEFT":
+                return Ex(f"{s_.code}[:max(0, {n_.code})]", STRING, "str")
+            return Ex(f"({s_.code}[-{n_.code}:] if {n_.code} > 0 else '')", STRING, "str")
+        if name == "MID":
+            need(3)
+            s_, n_, p_ = args  # MID(IN, L, P): L characters from position P (1-based)
+            return Ex(
+                f"{s_.code}[max(0, {p_.code} - 1):max(0, {p_.code} - 1) + max(0, {n_.code})]", STRING, "str"
+            )
+        if name == "FIND":
+            need(2)
+            return Ex(f"({args[0].code}.find({args[1].code}) + 1)", ELEMENTARY["INT"], "i32")
         raise self.err(self.src, node, f"unknown function '{name}'")
 
     def lvalue(self, node: Node) -> Ex:
@@ -1444,6 +1546,8 @@ class Compiler:
             return "0"
         if k == "string":
             return "''"
+        if k == "ref":
+            return "None"
         if k == "struct":
             return f"{self.struct_class(t)}()"
         if k == "fb":
@@ -1795,6 +1899,7 @@ class Compiler:
 
     # ------------------------------------------------------------------ driver
     def compile(self) -> tuple[str, list[tuple[str, str, int]]]:
+        self._resolving: set[str] = set()
         self.struct_done: set[str] = set()
         self.struct_pending: list[tuple[str, Type]] = []
         self.pou = None
@@ -1814,6 +1919,8 @@ class Compiler:
         self.collect()
         self.check_externals()
         for pou in self.pous.values():
+            if pou.failed:
+                continue
             try:
                 self.gen_pou(pou)
             except _Err as e:
@@ -1844,7 +1951,6 @@ class Compiler:
             self.collect_globals()
         except _Err as e:
             self.diags.append(e.diag)
-        self.pous.clear()
 
 
 RUNTIME_NAMES = (
@@ -1870,7 +1976,17 @@ def _copy_array(a: list) -> list:
 
 def _namespace() -> dict:
     ns: dict = {name: getattr(rt, name) for name in RUNTIME_NAMES}
-    ns.update({"mk": _mk, "copy_array": _copy_array, "Clock": stdfbs.Clock, "min": min, "max": max})
+    ns.update(
+        {
+            "mk": _mk,
+            "copy_array": _copy_array,
+            "Ref": rt.Ref,
+            "deref": rt.deref,
+            "Clock": stdfbs.Clock,
+            "min": min,
+            "max": max,
+        }
+    )
     for name, (cls, _) in stdfbs.STANDARD_FBS.items():
         ns[name] = cls
     return ns

@@ -164,6 +164,26 @@ def _rewrite(text: str) -> tuple[str, dict[int, tuple[str, str]], dict[int, str]
         chars[m.start(1) + len(m.group(1))] = "_"
         enum_literals[m.start()] = (m.group(1), m.group(2))
 
+    # pragmas: `{attribute ...}` and OpenPLC's `{{ C code }}` do not change the ST semantics we run
+    k = 0
+    while k < len(text):
+        if mask[k] and text[k] == "{":
+            depth, j = 0, k
+            while j < len(text):
+                if text[j] == "{":
+                    depth += 1
+                elif text[j] == "}":
+                    depth -= 1
+                    if depth == 0:
+                        break
+                j += 1
+            for q in range(k, min(j + 1, len(text))):
+                if chars[q] != "\n":
+                    chars[q] = " "
+            k = j + 1
+            continue
+        k += 1
+
     for block in _TYPE_BLOCK.finditer(text):
         if not mask[block.start()]:
             continue

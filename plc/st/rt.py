@@ -302,3 +302,17 @@ def abs_int(x: int) -> int:
 
 def abs_float(x: float) -> float:
     return -x if x < 0 else x  # MatIEC: (x < 0 ? -x : x), so ABS(-0.0) stays -0.0
+
+
+# ---------------------------------------------------------------- REF_TO (read-only, as MatIEC compiles it)
+class Ref:
+    __slots__ = ("get",)
+
+    def __init__(self, getter) -> None:
+        self.get = getter
+
+
+def deref(r: Ref | None):
+    if r is None:
+        raise PlcRuntimeError("other", "dereference of a NULL reference")
+    return r.get()

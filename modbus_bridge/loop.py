@@ -212,6 +212,20 @@ class ZoneSequencer:
             self.plant.time_constant_scale = float(value)  # type: ignore[attr-defined, arg-type]
 
 
+async def _pwm_step(
+    client: PlcClient, writes: dict, scans: int, read_names: list[str], pwm_names: list[str]
+) -> dict:
+    """PWM outputs averaged over a plant step of several scans: the coils are sampled after every scan."""
+    values = dict(await client.exchange(writes, 1, read_names))
+    sums = {n: float(values[n]) for n in pwm_names}
+    for _ in range(scans - 1):
+        sample = await client.step_and_read(1, pwm_names)
+        for n in pwm_names:
+            sums[n] += float(sample[n])
+    values.update({n: total / scans for n, total in sums.items()})
+    return values
+
+
 def required_roles(scenario: Scenario, zone: Zone) -> list[str]:
     roles = ["pv", "setpoint", "mode", "state"]
     roles.append("pwm_heat" if scenario.output_path == "pwm" else "y")
@@ -292,6 +306,7 @@ async def close_loop(
         )
         slow_names += [b[r] for r in GAIN_ROLES if b.has(r)]
     slow_values: dict = {}
+    pwm_names = [n for n in read_names if client.regmap[n].is_bit]
     u = [0.0] * plant.channels
     states: list[int | None] = [None] * len(seqs)
     error_ids: list[int | None] = [None] * len(seqs)
@@ -337,6 +352,8 @@ async def close_loop(
                 result.jitter_ms.append((time.perf_counter() - target) * 1e3)
                 await client.write_tags(writes)
                 values = await client.read_tags(read_names)
+            elif scenario.output_path == "pwm" and scenario.scans_per_step > 1:
+                values = await _pwm_step(client, writes, scenario.scans_per_step, read_names, pwm_names)
             else:
                 values = await client.exchange(writes, scenario.scans_per_step, read_names)
             new_states = [int(values[seq.binding["state"]]) for seq in seqs]
@@ -347,10 +364,10 @@ async def close_loop(
                 states[i] = new_states[i]
                 error_ids[i] = int(values[b["error"]]) if b.has("error") else None
                 if scenario.output_path == "pwm":
-                    heat = bool(values[b["pwm_heat"]])
-                    cool = bool(values[b["pwm_cool"]]) if b.has("pwm_cool") else False
+                    heat = float(values[b["pwm_heat"]])  # duty over the step (1 sample per scan)
+                    cool = float(values[b["pwm_cool"]]) if b.has("pwm_cool") else 0.0
                     u[z.channel] = PERCENT * (heat - cool)
-                    tr.pwm.append(int(heat) - int(cool))
+                    tr.pwm.append(round(heat) - round(cool))
                 else:
                     u[z.channel] = float(values[b["y"]])
                 tr.t.append(t)

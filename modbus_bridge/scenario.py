@@ -331,8 +331,6 @@ def load_scenario(path: str | Path) -> Scenario:
     pv_path = plc.get("pv_path", str, "real", choices=PV_PATHS)
     output_path = plc.get("output", str, "analog", choices=OUTPUT_PATHS)
     plc.done()
-    if output_path == "pwm" and scans != 1:
-        plc.fail("scans_per_step", "PWM output is sampled every scan: needs scans_per_step = 1")
     model, params, plant = _plant_params(top.sub("plant", required=True))
     zones = []
     seen: set[int] = set()

@@ -194,3 +194,14 @@ def test_realtime_mode_paces_the_plant_and_reports_jitter():
     assert result.steps == 20 and len(result.jitter_ms) == 20
     assert wall >= 2.0 / 4.0 - 0.05  # paced: 2 s of plant time at 4x take at least 0.5 s
     assert all(j >= -1.0 for j in result.jitter_ms)  # never early
+
+
+def test_pwm_duty_is_averaged_over_a_multi_scan_step():
+    sc = load_scenario(SCENARIO)
+    sc = dataclasses.replace(sc, output_path="pwm", scans_per_step=10, dt_s=1.0)
+    ((r, _),) = run(sc)
+    assert r.error is None
+    tr = r.zones[0]
+    # the fixture's PWM has a 10-scan period; at its 50 % tuning output every 10-scan step averages 0.5
+    tune_u = [u for u, ph in zip(tr.u, tr.phase, strict=True) if ph == "tune"][1:]
+    assert tune_u and all(u == pytest.approx(50.0) for u in tune_u)

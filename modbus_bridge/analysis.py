@@ -29,6 +29,14 @@ from .metrics import (
 )
 
 LOAD_KINDS = ("load_step", "ambient_step", "fan", "filament")
+TUNE_KEYS = {
+    "ks": "identified_ks_c_per_pct",
+    "tu": "identified_tu_s",
+    "tg": "identified_tg_s",
+    "kp": "tuned_kp_pct_per_c",
+    "tn": "tuned_tn_s",
+    "tv": "tuned_tv_s",
+}
 
 
 @dataclass
@@ -78,7 +86,7 @@ def zone_metrics(result: RunResult, tr: ZoneTrace) -> list[PhaseMetrics]:
                 pm.values["tuning_duration_s"] = rec.t_end - rec.t_start
             pm.values["tuning_pv_excursion_c"] = float(np.max(y) - np.min(y))
             for key, val in rec.tuned.items():
-                pm.values[f"identified_{key}"] = val
+                pm.values[TUNE_KEYS[key]] = val
             if is_step:
                 last_step = abs(rec.setpoint - rec.pv_start)
         elif is_step and abs(rec.setpoint - rec.pv_start) > 0.0:

@@ -23,9 +23,12 @@ from .metrics import json_safe
 
 SUMMARY_KEYS = (
     "tuning_duration_s",
-    "identified_ks",
-    "identified_tu",
-    "identified_tg",
+    "identified_ks_c_per_pct",
+    "identified_tu_s",
+    "identified_tg_s",
+    "tuned_kp_pct_per_c",
+    "tuned_tn_s",
+    "tuned_tv_s",
     "dead_time_s",
     "rise_time_s",
     "settling_time_2pct_s",

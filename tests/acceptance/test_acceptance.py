@@ -45,8 +45,8 @@ def test_tuning_identifies_the_plant_within_10_percent(harness, name):
     tune = metrics[0]
     assert tune.outcome == "ok", f"tuning did not complete: {tune.outcome}"
     p = sc.plant_params
-    truth = {"identified_ks": p["gain_c_per_pct"], "identified_tu": p["dead_time_s"],
-             "identified_tg": p["time_constant_s"]}
+    truth = {"identified_ks_c_per_pct": p["gain_c_per_pct"], "identified_tu_s": p["dead_time_s"],
+             "identified_tg_s": p["time_constant_s"]}
     for key, true in truth.items():
         got = tune.values[key]
         assert abs(got - true) <= IDENTIFICATION_TOLERANCE * true, f"{name}: {key} = {got:.4g}, plant {true}"

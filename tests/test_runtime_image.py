@@ -129,3 +129,16 @@ def test_codec_round_trips_and_wraps():
     assert codec.decode([0xFFFF], codec.IEC_TYPES["UINT"]) == 65535
     assert codec.words_to_text(codec.text_to_words("division by zero", 8)) == "division by zero"
     assert codec.text_to_words("abc", 2) == [0x6162, 0x6300]
+
+
+@pytest.mark.parametrize(
+    ("iec_type", "n_words", "value"),
+    [("REAL", 2, -(2.0**-140)), ("REAL", 2, float("inf")), ("LREAL", 4, -0.1), ("DINT", 2, -2147483648),
+     ("UDINT", 2, 4294967295), ("INT", 1, -1), ("WORD", 1, 0xABCD), ("LINT", 4, -(2**63)),
+     ("ULINT", 4, 2**64 - 1)],
+)
+def test_fast_encoder_matches_the_reference_codec(iec_type, n_words, value):
+    info = codec.IEC_TYPES[iec_type]
+    words = list(codec.word_encoder(info, n_words)(value))
+    assert words == codec.encode(value, info, n_words)
+    assert codec.decode(words, info) == value

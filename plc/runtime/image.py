@@ -40,9 +40,12 @@ class Slot:
     var: LocatedLike
     place: ModbusPlace
     info: codec.IecTypeInfo
+    encoder: Callable[[object], tuple[int, ...]] | None = None
 
     def words(self) -> list[int]:
-        return codec.encode(self.var.get(), self.info, self.place.n_words)
+        if self.encoder is None:
+            self.encoder = codec.word_encoder(self.info, self.place.n_words)
+        return list(self.encoder(self.var.get()))
 
     def store_words(self, words: list[int]) -> None:
         self.var.set(codec.decode(words, self.info))
@@ -152,17 +155,17 @@ class ModbusImage:
         slots = self._reg_slots[table]
         buffer = self._reg_buffers[table]
         out: list[int] = []
-        cache: dict[int, list[int]] = {}
-        for addr in range(address, address + count):
+        addr, end = address, address + count
+        while addr < end:
             entry = slots.get(addr)
             if entry is None:
                 out.append(buffer[addr])
+                addr += 1
                 continue
             slot, offset = entry
-            words = cache.get(id(slot))
-            if words is None:
-                words = cache[id(slot)] = slot.words()
-            out.append(words[offset])
+            take = min(slot.place.n_words - offset, end - addr)
+            out += slot.words()[offset : offset + take]
+            addr += take
         return out
 
     def write_registers(self, table: Table, address: int, values: Sequence[int]) -> ModbusError | None:

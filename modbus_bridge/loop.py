@@ -177,6 +177,8 @@ class ZoneSequencer:
                 return
         elif ph.duration_s is not None and elapsed >= ph.duration_s - 1e-9:
             done = True
+        elif ph.end_at_s is not None and t >= ph.end_at_s - 1e-9:
+            done = True
         if done:
             rec.t_end = t
             self._enter(t, pv, writes)

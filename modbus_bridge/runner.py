@@ -103,6 +103,9 @@ async def run_variants(
             async with SoftPlc(text, host="127.0.0.1", port=0, stepped=not realtime) as soft:
                 setup.startup_s += time.perf_counter() - t0
                 async with PlcClient("127.0.0.1", soft.port, setup.regmap, name="soft-PLC") as client:
+                    # the application takes its parameter registers from the controller on its first scan:
+                    # scan before the scenario writes anything (a real PLC has long been scanning)
+                    await _reset_controllers(client, bindings, setup.codes, stepped=not realtime)
                     result = await close_loop(
                         scenario,
                         variant,

@@ -59,6 +59,7 @@ class Phase:
     manual_pct: float | None = None
     fuzzy: bool | None = None
     duration_s: float | None = None
+    end_at_s: float | None = None  # absolute scenario time (aligns zones after event-driven phases)
     until: str | None = None
     timeout_s: float | None = None
     disturbances: list[Disturbance] = field(default_factory=list)
@@ -119,7 +120,13 @@ class Scenario:
     @property
     def nominal_duration_s(self) -> float:
         """Longest zone programme, counting an `until` phase at its timeout."""
-        return max(sum((p.duration_s or p.timeout_s or 0.0) for p in z.phases) for z in self.zones)
+        ends = []
+        for z in self.zones:
+            t = 0.0
+            for p in z.phases:
+                t = max(t, p.end_at_s) if p.end_at_s is not None else t + (p.duration_s or p.timeout_s or 0.0)
+            ends.append(t)
+        return max(ends)
 
 
 class _Table:
@@ -285,11 +292,12 @@ def _phase(tab: _Table) -> Phase:
         manual_pct=tab.get("manual_pct", float, None, minimum=-100.0, maximum=100.0),
         fuzzy=tab.get("fuzzy", bool, None),
         duration_s=tab.get("duration_s", float, None, above=0.0),
+        end_at_s=tab.get("end_at_s", float, None, above=0.0),
         until=tab.get("until", str, None, choices=UNTIL_EVENTS),
         timeout_s=tab.get("timeout_s", float, None, above=0.0),
     )
-    if (ph.duration_s is None) == (ph.until is None):
-        tab.fail("duration_s", "give exactly one of duration_s or until")
+    if sum(x is not None for x in (ph.duration_s, ph.until, ph.end_at_s)) != 1:
+        tab.fail("duration_s", "give exactly one of duration_s, until or end_at_s")
     if ph.until is not None and ph.timeout_s is None:
         tab.fail("timeout_s", "missing required field (a phase that waits for an event needs a timeout)")
     if ph.until is None and ph.timeout_s is not None:

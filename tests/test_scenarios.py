@@ -37,8 +37,12 @@ def write(tmp_path: Path, text: str) -> Path:
 BAD_CASES = [
     # (replace old, by new, expected key in message, expected reason fragment)
     ('name = "small fopdt"', 'name = "small fopdt"\ncolour = "red"', "colour", "unknown key"),
-    ('description = "test scenario: FOPDT, instant \'tuning\', step, load step"\n', "", "description",
-     "missing required field"),
+    (
+        "description = \"test scenario: FOPDT, instant 'tuning', step, load step\"\n",
+        "",
+        "description",
+        "missing required field",
+    ),
     ("dt_s = 0.1", "dt_s = 0.0", "dt_s", "must be > 0"),
     ("time_constant_s = 20.0", "time_constant_s = -3.0", "plant.time_constant_s", ">= 0"),
     ("time_constant_s = 20.0", "time_constant_z = 20.0", "plant.time_constant_z", "unknown key"),
@@ -47,6 +51,7 @@ BAD_CASES = [
     ("noise_sigma_c = 0.05", "noise_sigma_c = -1.0", "zone[1].sensor.noise_sigma_c", ">= 0"),
     ('name = "z1"\nplc_zone = 1', 'name = "z1"\nplc_zone = 1\nchannel = 3', "zone[1].channel", "1 channel"),
     ("duration_s = 40.0", 'duration_s = 40.0\nuntil = "tuned"', "zone[1].phase[2].duration_s", "exactly one"),
+    ("duration_s = 40.0", "end_at_s = 0.0", "zone[1].phase[2].end_at_s", "must be > 0"),
     ("timeout_s = 60.0\n", "", "zone[1].phase[1].timeout_s", "needs a timeout"),
     ("at_s = 2.0", "at_s = 50.0", "zone[1].phase[3].disturbance[1].at_s", "after the end of its phase"),
     ('kind = "load_step"', 'kind = "meteor"', "zone[1].phase[3].disturbance[1].kind", "must be one of"),

@@ -199,3 +199,20 @@ def test_pid_plant_conformance_over_modbus():
             got = c.read_holding(modbus["address"], modbus["count"])
             if result["compare"] == "exact":
                 assert got == result["raw"], result["var"]
+
+
+def test_no_file_runs_the_bundle():
+    from plc.bundle import bundle_declarations
+
+    if not any(d.kind == "CONFIGURATION" for d in bundle_declarations()):
+        pytest.skip("the bundle has no CONFIGURATION yet (plc/app/)")
+    plc = PlcProcess(["--stepped"])
+    try:
+        with RawModbusClient("127.0.0.1", plc.port) as client:
+            client.step(3)
+            status = client.status()
+            assert status.scan_count == 3 and not status.faulted, status
+            assert status.time_ns == 3 * status.interval_ns
+    finally:
+        code, err = plc.interrupt()
+    assert code == 0, err

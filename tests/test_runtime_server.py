@@ -101,7 +101,15 @@ def test_one_read_write_request_per_step_with_rw_steps(stepped):
     assert out == [0, 5]
 
 
-def test_runtime_fault_stops_program_not_server(stepped):
+def test_single_word_write_of_a_real_keeps_the_other_word(stepped):
+    app, _, c = stepped
+    c.write_registers(2050, real_words(2.5))
+    c.write_register(2051, 0x0001)  # FC6 on the low word only
+    assert c.read_holding(2050, 2) == [0x4020, 0x0001]
+    assert app.values["in_real"] == words_real([0x4020, 0x0001])
+
+
+def test_runtime_fault_stops_program_not_server(stepped, caplog):
     app, _, c = stepped
     c.step(2)
     c.write_register(1026, 0)  # divisor := 0
@@ -111,6 +119,8 @@ def test_runtime_fault_stops_program_not_server(stepped):
     assert "division by zero" in status.fault_text
     assert status.scan_count == 2
     assert exception_code(c.step, 1) == DEVICE_FAILURE  # still stopped
+    messages = [r.getMessage() for r in caplog.records]
+    assert any("runtime fault" in m and "division by zero" in m for m in messages)
     assert c.read_holding(2048, 2) == [0, 3]  # served; the faulted scan got as far as cnt
     c.write_register(1026, 1)
     c.reset_fault()

@@ -114,7 +114,13 @@ def zone_metrics(result: RunResult, tr: ZoneTrace) -> list[PhaseMetrics]:
             if tr.pwm
             else None
         )
-        pm.values.update(effort_metrics(t, u, plant.u_min_pct, plant.u_max_pct, pwm))
+        # effort on the controller's analog output (with PWM the applied duty is 0/100 % most of the time)
+        y_cmd = (
+            np.asarray(tr.y)[(np.asarray(tr.t) >= rec.t_start) & (np.asarray(tr.t) < rec.t_end)]
+            if len(tr.y) == len(tr.t)
+            else u
+        )
+        pm.values.update(effort_metrics(t, y_cmd, plant.u_min_pct, plant.u_max_pct, pwm))
         out.append(pm)
     return out
 

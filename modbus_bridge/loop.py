@@ -56,6 +56,7 @@ class ZoneTrace:
     true_c: list[float] = field(default_factory=list)  # plant temperature at the sensor
     setpoint: list[float] = field(default_factory=list)
     u: list[float] = field(default_factory=list)  # controller output applied to the plant, %
+    y: list[float] = field(default_factory=list)  # the controller's analog output register, %
     pwm: list[int] = field(default_factory=list)
     state: list[int] = field(default_factory=list)
     alarm: list[int] = field(default_factory=list)
@@ -301,11 +302,9 @@ async def close_loop(
     for z in scenario.zones:
         b = bindings[z.plc_zone]
         read_names += [b["state"]] + [b[r] for r in ("error", "alarm") if b.has(r)]
-        read_names += (
-            [b["pwm_heat"]] + ([b["pwm_cool"]] if b.has("pwm_cool") else [])
-            if scenario.output_path == "pwm"
-            else [b["y"]]
-        )
+        read_names += [b["y"]] if b.has("y") else []
+        if scenario.output_path == "pwm":
+            read_names += [b["pwm_heat"]] + ([b["pwm_cool"]] if b.has("pwm_cool") else [])
         slow_names += [b[r] for r in GAIN_ROLES if b.has(r)]
     slow_values: dict = {}
     pwm_names = [n for n in read_names if client.regmap[n].is_bit]
@@ -372,6 +371,8 @@ async def close_loop(
                     tr.pwm.append(round(heat) - round(cool))
                 else:
                     u[z.channel] = float(values[b["y"]])
+                if b.has("y"):
+                    tr.y.append(float(values[b["y"]]))
                 tr.t.append(t)
                 tr.pv.append(measured[i])
                 tr.true_c.append(temps[z.channel])

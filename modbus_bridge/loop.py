@@ -26,7 +26,9 @@ from .sensors import Sensor
 
 PERCENT = 100.0
 GAIN_ROLES = ("kp_eff", "tn_eff", "tv_eff", "kp", "tn", "tv", "ks", "tu", "tg")
-GAIN_READ_EVERY = 10  # plant steps between reads of gains and identified plant (1 s at dt = 0.1 s)
+# plant steps between reads of gains, identified plant, state and error id (1 s at dt = 0.1 s); the state
+# is read every step while a zone waits for an event (until = "tuned")
+GAIN_READ_EVERY = 10
 SECONDS_PER_MINUTE = 60.0
 
 
@@ -297,11 +299,13 @@ async def close_loop(
     result = RunResult(scenario=scenario, variant=variant, zones=traces, realtime=realtime)
     dt = scenario.dt_s
     horizon = max_plant_time_s or scenario.nominal_duration_s
-    read_names: list[str] = []
+    read_names: list[str] = []  # every step: outputs and alarm word
+    status_names: list[str] = []  # state and error id: every step while a zone waits for an event
     slow_names: list[str] = []  # gains and identified plant: read every GAIN_READ_EVERY steps and on changes
     for z in scenario.zones:
         b = bindings[z.plc_zone]
-        read_names += [b["state"]] + [b[r] for r in ("error", "alarm") if b.has(r)]
+        status_names += [b["state"]] + ([b["error"]] if b.has("error") else [])
+        read_names += [b["alarm"]] if b.has("alarm") else []
         read_names += [b["y"]] if b.has("y") else []
         if scenario.output_path == "pwm":
             read_names += [b["pwm_heat"]] + ([b["pwm_cool"]] if b.has("pwm_cool") else [])
@@ -357,13 +361,20 @@ async def close_loop(
                 values = await _pwm_step(client, writes, scenario.scans_per_step, read_names, pwm_names)
             else:
                 values = await client.exchange(writes, scenario.scans_per_step, read_names)
-            new_states = [int(values[seq.binding["state"]]) for seq in seqs]
+            waiting = any(not seq.finished and seq.phase.until is not None for seq in seqs)
+            if waiting or realtime or k % GAIN_READ_EVERY == 0:
+                values.update(await client.read_tags(status_names))
+                new_states = [int(values[seq.binding["state"]]) for seq in seqs]
+                error_ids = [
+                    int(values[seq.binding["error"]]) if seq.binding.has("error") else None for seq in seqs
+                ]
+            else:
+                new_states = list(states)  # type: ignore[arg-type]
             if slow_names and (k % GAIN_READ_EVERY == 0 or new_states != states):
                 slow_values = await client.read_tags(slow_names)
             for i, (z, seq, tr) in enumerate(zip(scenario.zones, seqs, traces, strict=True)):
                 b = seq.binding
                 states[i] = new_states[i]
-                error_ids[i] = int(values[b["error"]]) if b.has("error") else None
                 if scenario.output_path == "pwm":
                     heat = float(values[b["pwm_heat"]])  # duty over the step (1 sample per scan)
                     cool = float(values[b["pwm_cool"]]) if b.has("pwm_cool") else 0.0

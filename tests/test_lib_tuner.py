@@ -294,3 +294,15 @@ def test_tuning_error_bit_clears_after_leaving_tune(uut) -> None:
     uut.scan()
     assert not uut.get("fbUut.dwAlarm") & 0x20000
     assert uut.get("nState") == 1 and uut.get("fbUut.nErrorId") == 0
+
+
+def test_settled_response_uses_t28_t63_of_seed_003(uut) -> None:
+    # the setpoint is out of reach: the step runs to steady state and ends by the levelled-off test
+    plant = Fopdt(k=1.0, t=20.0, l=5.0)
+    run_tune(uut, plant, w=200.0, y_tune=50.0)
+    assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
+    assert uut.get("fbUut.fbTuner.bSettled") is True
+    got = identified(uut)
+    assert got["fKs"] == pytest.approx(1.0, rel=0.05)
+    assert got["fTu"] == pytest.approx(5.0, rel=0.10)
+    assert got["fTg"] == pytest.approx(20.0, rel=0.10)

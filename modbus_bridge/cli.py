@@ -70,6 +70,7 @@ def main_run(args: argparse.Namespace) -> int:
         check_bindings(scenario, setup.bindings(scenario), setup.codes, setup.regmap)
     except RegisterMapError as exc:
         raise UserError(str(exc)) from None
+    out_dir = Path(args.out) if args.out else OUT_DIR / slug(scenario.name)
     bar = ProgressBar(scenario.name)
     bar.enabled = not args.quiet
     try:
@@ -80,12 +81,11 @@ def main_run(args: argparse.Namespace) -> int:
                 )
             )
         else:  # embedded stepped soft-PLC: controller variants run side by side in parallel processes
-            runs = run_variants_parallel(scenario, setup, progress=bar)
+            runs = run_variants_parallel(scenario, setup, progress=bar, plot_dir=out_dir)
     except RegisterMapError as exc:
         raise UserError(str(exc)) from None
     finally:
         bar.close()
-    out_dir = Path(args.out) if args.out else OUT_DIR / slug(scenario.name)
     written = write_reports(runs, out_dir)
     header, rows = summary_rows(runs)
     print(text_table(header, rows))

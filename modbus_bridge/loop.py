@@ -79,6 +79,7 @@ class RunResult:
     realtime: bool = False
     jitter_ms: list[float] = field(default_factory=list)
     error: str | None = None
+    plot_path: str | None = None  # set when the plot was already drawn (parallel variants draw their own)
 
 
 class ZoneSequencer:

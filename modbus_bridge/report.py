@@ -182,7 +182,8 @@ def write_reports(runs: list[tuple[RunResult, list[PhaseMetrics]]], out_dir: Pat
         tag = slug(result.variant.name)
         csv_path, png_path = out_dir / f"trace_{tag}.csv", out_dir / f"plot_{tag}.png"
         write_csv(result, csv_path)
-        write_plot(result, png_path)
+        if result.plot_path is None or Path(result.plot_path) != png_path or not png_path.exists():
+            write_plot(result, png_path)
         written[f"csv:{tag}"], written[f"png:{tag}"] = csv_path, png_path
         doc["variants"].append(
             {

@@ -8,6 +8,7 @@ import asyncio
 import sys
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from .analysis import PhaseMetrics, run_metrics
 from .binding import ControllerCodes, ZoneBinding, resolve_zone
@@ -155,7 +156,16 @@ def _child_run(scenario: Scenario, setup: HarnessSetup, index: int, queue, kwarg
 
     try:
         single = dataclasses.replace(scenario, variants=[scenario.variants[index]])
+        plot_dir = kwargs.pop("plot_dir", None)
         runs = asyncio.run(run_variants(single, setup, progress=progress, **kwargs))
+        result = runs[0][0]
+        if plot_dir is not None:  # draw in parallel too
+            from .report import slug, write_plot
+
+            path = Path(plot_dir) / f"plot_{slug(result.variant.name)}.png"
+            path.parent.mkdir(parents=True, exist_ok=True)
+            write_plot(result, path)
+            result.plot_path = str(path)
         queue.put(("result", index, runs[0]))
     except BaseException as exc:  # noqa: BLE001 - handed to the parent, which re-raises it
         queue.put(("error", index, exc))
@@ -167,6 +177,7 @@ def run_variants_parallel(
     *,
     progress: ProgressFn | None = None,
     max_plant_time_s: float | None = None,
+    plot_dir: Path | None = None,
 ) -> list[tuple[RunResult, list[PhaseMetrics]]]:
     """Variants on the embedded stepped soft-PLC, one forked process each (they share nothing: every
     process loads its own soft-PLC), so a side-by-side comparison costs the wall time of one run on a
@@ -180,7 +191,7 @@ def run_variants_parallel(
     setup.program_text()  # bundle once, before forking
     ctx = mp.get_context("fork")
     queue = ctx.Queue()
-    kwargs = {"max_plant_time_s": max_plant_time_s}
+    kwargs = {"max_plant_time_s": max_plant_time_s, "plot_dir": plot_dir}
     procs = [
         ctx.Process(target=_child_run, args=(scenario, setup, i, queue, kwargs), daemon=True)
         for i in range(len(scenario.variants))

@@ -52,7 +52,7 @@ def test_regmap_markdown_matches_the_generator(tmp_path):
 @pytest.mark.skipif(not list(APP_DIR.glob("*.st")), reason="no application in plc/app yet")
 def test_run_against_an_external_stepped_plc(tmp_path):
     """`thermost plc --stepped` in another process, `thermost run --plc` against it."""
-    thermost = [sys.executable, "-m", "plc.cli"]
+    thermost = [sys.executable, "-c", "import sys; from plc.cli import main; sys.exit(main(sys.argv[1:]))"]
     plc = subprocess.Popen(
         [*thermost, "plc", "--port", "0", "--stepped"],
         cwd=ROOT,

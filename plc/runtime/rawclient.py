@@ -16,6 +16,7 @@ MBAP = struct.Struct(">HHHB")
 EXCEPTION_FLAG = 0x80
 DEFAULT_UNIT = 1
 DEFAULT_TIMEOUT_S = 10.0
+MAX_ADU = 260  # largest Modbus TCP frame
 
 
 class ModbusException(Exception):
@@ -71,8 +72,13 @@ class RawModbusClient:
         """Send one PDU, return the response PDU without its function code byte."""
         self._tid = (self._tid + 1) & 0xFFFF
         self._sock.sendall(MBAP.pack(self._tid, 0, len(pdu) + 1, self.unit) + pdu)
-        tid, _, length, _ = MBAP.unpack(self._recv_exact(MBAP.size))
-        body = self._recv_exact(length - 1)
+        reply = self._sock.recv(MAX_ADU)  # usually the whole reply in one system call
+        if len(reply) < MBAP.size:
+            reply += self._recv_exact(MBAP.size - len(reply))
+        tid, _, length, _ = MBAP.unpack_from(reply)
+        body = reply[MBAP.size :]
+        if len(body) < length - 1:
+            body += self._recv_exact(length - 1 - len(body))
         if tid != self._tid:
             raise ConnectionError(f"transaction id {tid} does not match {self._tid}")
         if body[0] & EXCEPTION_FLAG:

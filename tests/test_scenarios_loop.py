@@ -205,3 +205,27 @@ def test_pwm_duty_is_averaged_over_a_multi_scan_step():
     # the fixture's PWM has a 10-scan period; at its 50 % tuning output every 10-scan step averages 0.5
     tune_u = [u for u, ph in zip(tr.u, tr.phase, strict=True) if ph == "tune"][1:]
     assert tune_u and all(u == pytest.approx(50.0) for u in tune_u)
+
+
+def test_model_mismatch_changes_the_plant_mid_run():
+    from modbus_bridge.scenario import Disturbance
+
+    sc = load_scenario(SCENARIO)
+    step = sc.zones[0].phases[1]
+    slow_step = dataclasses.replace(step, disturbances=[Disturbance("model_mismatch", 0.0, 3.0)])
+    slow = dataclasses.replace(
+        sc, zones=[dataclasses.replace(sc.zones[0], phases=[sc.zones[0].phases[0], slow_step])]
+    )
+    nominal = dataclasses.replace(
+        sc, zones=[dataclasses.replace(sc.zones[0], phases=[sc.zones[0].phases[0], step])]
+    )
+    ((a, ma),) = run(nominal)
+    ((b, mb),) = run(slow)
+    t_step = a.zones[0].phases[1].t_start
+    same = [
+        x == y for x, y, t in zip(a.zones[0].pv, b.zones[0].pv, a.zones[0].t, strict=False) if t <= t_step
+    ]
+    assert all(same)  # identical until the mismatch is applied
+    rise = {m.phase: m.values["rise_time_s"] for m in ma if m.kind == "step"}
+    rise_slow = {m.phase: m.values["rise_time_s"] for m in mb if m.kind == "step"}
+    assert rise_slow["step"] > 1.5 * rise["step"]  # a 3x slower plant rises much more slowly

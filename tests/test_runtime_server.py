@@ -209,3 +209,19 @@ def test_real_time_mode_scans_on_the_task_interval():
         c.reset_fault()
         time.sleep(0.05)
         assert c.status().scan_count > frozen
+
+
+class SlowApplication(FakeApplication):
+    """Scans take 2.5 intervals: the real-time clock must count overruns and not burst."""
+
+    def scan(self) -> None:
+        time.sleep(2.5 * self.interval_ns / 1e9)
+        super().scan()
+
+
+def test_real_time_overruns_are_counted():
+    with SoftPlcThread(SlowApplication(), stepped=False) as plc, RawModbusClient("127.0.0.1", plc.port) as c:
+        time.sleep(0.25)
+        status = c.status()
+    assert status.overruns >= 1
+    assert status.scan_count <= 0.25 / (2.5 * INTERVAL_NS / 1e9) + 2  # no catch-up burst

@@ -26,6 +26,8 @@ from .sensors import Sensor
 
 PERCENT = 100.0
 GAIN_ROLES = ("kp_eff", "tn_eff", "tv_eff", "kp", "tn", "tv", "ks", "tu", "tg")
+TUNED_ROLES = ("kp", "tn", "tv", "ks", "tu", "tg")
+PROGRESS_EVERY = 50  # plant steps between progress reports
 # plant steps between reads of gains, identified plant, state and error id (1 s at dt = 0.1 s); the state
 # is read every step while a zone waits for an event (until = "tuned")
 GAIN_READ_EVERY = 10
@@ -273,6 +275,165 @@ def check_bindings(
 ProgressFn = Callable[[float, float], None]
 
 
+@dataclass
+class _ReadPlan:
+    """Which registers are read when: every step (outputs, alarm word), while a zone waits for an event
+    or every GAIN_READ_EVERY steps (state, error id), every GAIN_READ_EVERY steps and on a state change
+    (gains, identified plant)."""
+
+    every_step: list[str]
+    status: list[str]
+    slow: list[str]
+    pwm: list[str]
+
+    @staticmethod
+    def of(scenario: Scenario, bindings: dict[int, ZoneBinding], client: PlcClient) -> _ReadPlan:
+        every, status, slow = [], [], []
+        for z in scenario.zones:
+            b = bindings[z.plc_zone]
+            status += [b["state"]] + ([b["error"]] if b.has("error") else [])
+            every += [b[r] for r in ("alarm", "y") if b.has(r)]
+            if scenario.output_path == "pwm":
+                every += [b["pwm_heat"]] + ([b["pwm_cool"]] if b.has("pwm_cool") else [])
+            slow += [b[r] for r in GAIN_ROLES if b.has(r)]
+        return _ReadPlan(every, status, slow, [n for n in every if client.regmap[n].is_bit])
+
+
+class _LoopCloser:
+    """State of one run; `close_loop` is the entry point."""
+
+    def __init__(
+        self,
+        scenario: Scenario,
+        variant: Variant,
+        client: PlcClient,
+        bindings: dict[int, ZoneBinding],
+        codes: ControllerCodes,
+        realtime: bool,
+        speed: float,
+    ) -> None:
+        self.scenario, self.client, self.realtime, self.speed = scenario, client, realtime, speed
+        self.plant: Plant = scenario.build_plant()
+        self.pdist = PlantDisturbance.for_channels(self.plant.channels)
+        self.traces = [ZoneTrace(name=z.name, plc_zone=z.plc_zone) for z in scenario.zones]
+        self.sensors = [z.sensor.build(seed=scenario.seed * 1000 + i) for i, z in enumerate(scenario.zones)]
+        self.seqs = [
+            ZoneSequencer(
+                z, bindings[z.plc_zone], codes, variant, self.pdist.zones[z.channel], self.pdist, s, tr
+            )
+            for z, s, tr in zip(scenario.zones, self.sensors, self.traces, strict=True)
+        ]
+        for seq in self.seqs:
+            seq.plant = self.plant
+        self.plan = _ReadPlan.of(scenario, bindings, client)
+        self.result = RunResult(scenario=scenario, variant=variant, zones=self.traces, realtime=realtime)
+        self.u = [0.0] * self.plant.channels
+        self.states: list[int | None] = [None] * len(self.seqs)
+        self.error_ids: list[int | None] = [None] * len(self.seqs)
+        self.slow_values: dict = {}
+        self.wall0 = time.perf_counter()
+
+    async def start(self) -> None:
+        """Sensors at the plant's initial temperature, PV source selection, first phase of every zone."""
+        writes: dict = {}
+        temps = self.plant.temperatures()
+        for z, s, seq in zip(self.scenario.zones, self.sensors, self.seqs, strict=True):
+            s.reset(temps[z.channel])
+            if seq.binding.has("pv_select"):
+                writes[seq.binding["pv_select"]] = self.scenario.pv_path == "raw"
+            seq.start(0.0, temps[z.channel], writes)
+        if writes:
+            await self.client.write_tags(writes)
+
+    def sequence_and_measure(self, k: int, t: float, temps: list[float]) -> tuple[dict, list[float]]:
+        """Phase programmes advance, sensors measure; returns the writes of this step and the PVs."""
+        writes: dict = {}
+        measured = []
+        dt = self.scenario.dt_s
+        for i, (z, s, seq) in enumerate(zip(self.scenario.zones, self.sensors, self.seqs, strict=True)):
+            pv = s.measure(temps[z.channel], dt if k else 0.0)
+            measured.append(pv)
+            seq.update(t, dt, pv, self.states[i], writes, self.error_ids[i])
+            if self.scenario.pv_path == "raw":
+                writes[seq.binding["pv_raw"]] = s.last_counts
+            else:
+                writes[seq.binding["pv"]] = pv
+        return writes, measured
+
+    async def exchange(self, k: int, t: float, writes: dict) -> tuple[dict, list[int]]:
+        """Inputs to the PLC, scans (stepped) or pacing (real time), outputs back; the state when due."""
+        sc, client, plan = self.scenario, self.client, self.plan
+        if self.realtime:
+            target = self.wall0 + t / self.speed
+            delay = target - time.perf_counter()
+            if delay > 0:
+                await asyncio.sleep(delay)
+            self.result.jitter_ms.append((time.perf_counter() - target) * 1e3)
+            await client.write_tags(writes)
+            values = await client.read_tags(plan.every_step)
+        elif sc.output_path == "pwm" and sc.scans_per_step > 1:
+            values = await _pwm_step(client, writes, sc.scans_per_step, plan.every_step, plan.pwm)
+        else:
+            values = await client.exchange(writes, sc.scans_per_step, plan.every_step)
+        waiting = any(not seq.finished and seq.phase.until is not None for seq in self.seqs)
+        if waiting or self.realtime or k % GAIN_READ_EVERY == 0:
+            values.update(await client.read_tags(plan.status))
+            new_states = [int(values[seq.binding["state"]]) for seq in self.seqs]
+            self.error_ids = [
+                int(values[q.binding["error"]]) if q.binding.has("error") else None for q in self.seqs
+            ]
+        else:
+            new_states = list(self.states)  # type: ignore[arg-type]
+        if plan.slow and (k % GAIN_READ_EVERY == 0 or new_states != self.states):
+            self.slow_values = await client.read_tags(plan.slow)
+        return values, new_states
+
+    def record(
+        self, t: float, temps: list[float], measured: list[float], values: dict, states: list[int]
+    ) -> None:
+        """Outputs to the plant inputs, one trace row per zone, tuned parameters into the phase record."""
+        for i, (z, seq, tr) in enumerate(zip(self.scenario.zones, self.seqs, self.traces, strict=True)):
+            b = seq.binding
+            self.states[i] = states[i]
+            if self.scenario.output_path == "pwm":
+                heat = float(values[b["pwm_heat"]])  # duty over the step (1 sample per scan)
+                cool = float(values[b["pwm_cool"]]) if b.has("pwm_cool") else 0.0
+                self.u[z.channel] = PERCENT * (heat - cool)
+                tr.pwm.append(round(heat) - round(cool))
+            else:
+                self.u[z.channel] = float(values[b["y"]])
+            if b.has("y"):
+                tr.y.append(float(values[b["y"]]))
+            if b.has("alarm"):
+                tr.alarm.append(int(values[b["alarm"]]))
+            tr.t.append(t)
+            tr.pv.append(measured[i])
+            tr.true_c.append(temps[z.channel])
+            tr.setpoint.append(seq.setpoint)
+            tr.u.append(self.u[z.channel])
+            tr.state.append(states[i])
+            tr.phase.append(seq.phase.name if not seq.finished else "")
+            for role in GAIN_ROLES:
+                if b.has(role):
+                    tr.gains.setdefault(role, []).append(float(self.slow_values[b[role]]))
+            if tr.phases and not seq.finished:
+                for role in TUNED_ROLES:
+                    if b.has(role):
+                        tr.phases[-1].tuned[role] = float(self.slow_values[b[role]])
+
+    def finish(self, k: int) -> None:
+        end_t = k * self.scenario.dt_s
+        for tr in self.traces:
+            for rec in tr.phases:
+                if math.isnan(rec.t_end):
+                    rec.t_end = end_t
+                    if self.result.error and rec is tr.phases[-1]:
+                        rec.outcome = "aborted"
+        self.result.steps = k
+        self.result.plant_time_s = end_t
+        self.result.wall_s = time.perf_counter() - self.wall0
+
+
 async def close_loop(
     scenario: Scenario,
     variant: Variant,
@@ -287,141 +448,32 @@ async def close_loop(
 ) -> RunResult:
     """Run the scenario against one PLC. PLC errors end the run with `error` set; the trace so far is kept."""
     check_bindings(scenario, bindings, codes, client.regmap)
-    plant: Plant = scenario.build_plant()
-    pdist = PlantDisturbance.for_channels(plant.channels)
-    traces = [ZoneTrace(name=z.name, plc_zone=z.plc_zone) for z in scenario.zones]
-    sensors = [z.sensor.build(seed=scenario.seed * 1000 + i) for i, z in enumerate(scenario.zones)]
-    seqs = [
-        ZoneSequencer(z, bindings[z.plc_zone], codes, variant, pdist.zones[z.channel], pdist, s, tr)
-        for z, s, tr in zip(scenario.zones, sensors, traces, strict=True)
-    ]
-    for seq in seqs:
-        seq.plant = plant
-    result = RunResult(scenario=scenario, variant=variant, zones=traces, realtime=realtime)
-    dt = scenario.dt_s
+    run = _LoopCloser(scenario, variant, client, bindings, codes, realtime, speed)
     horizon = max_plant_time_s or scenario.nominal_duration_s
-    read_names: list[str] = []  # every step: outputs and alarm word
-    status_names: list[str] = []  # state and error id: every step while a zone waits for an event
-    slow_names: list[str] = []  # gains and identified plant: read every GAIN_READ_EVERY steps and on changes
-    for z in scenario.zones:
-        b = bindings[z.plc_zone]
-        status_names += [b["state"]] + ([b["error"]] if b.has("error") else [])
-        read_names += [b["alarm"]] if b.has("alarm") else []
-        read_names += [b["y"]] if b.has("y") else []
-        if scenario.output_path == "pwm":
-            read_names += [b["pwm_heat"]] + ([b["pwm_cool"]] if b.has("pwm_cool") else [])
-        slow_names += [b[r] for r in GAIN_ROLES if b.has(r)]
-    slow_values: dict = {}
-    pwm_names = [n for n in read_names if client.regmap[n].is_bit]
-    u = [0.0] * plant.channels
-    states: list[int | None] = [None] * len(seqs)
-    error_ids: list[int | None] = [None] * len(seqs)
-    wall0 = time.perf_counter()
-    plant_cpu = 0.0
+    dt = scenario.dt_s
     k = 0
     try:
-        writes: dict = {}
-        temps = plant.temperatures()
-        for z, s, seq in zip(scenario.zones, sensors, seqs, strict=True):
-            s.reset(temps[z.channel])
-            b = seq.binding
-            if scenario.pv_path == "raw" and b.has("pv_select"):
-                writes[b["pv_select"]] = True
-            elif b.has("pv_select"):
-                writes[b["pv_select"]] = False
-            seq.start(0.0, temps[z.channel], writes)
-        if writes:
-            await client.write_tags(writes)
-        while not all(seq.finished for seq in seqs):
+        await run.start()
+        while not all(seq.finished for seq in run.seqs):
             t = k * dt
             if t >= horizon - 1e-9:
                 break
-            writes = {}
-            temps = plant.temperatures()
-            measured = []
-            for i, (z, s, seq) in enumerate(zip(scenario.zones, sensors, seqs, strict=True)):
-                pv = s.measure(temps[z.channel], dt if k else 0.0)
-                measured.append(pv)
-                seq.update(t, dt, pv, states[i], writes, error_ids[i])
-                b = seq.binding
-                if scenario.pv_path == "raw":
-                    writes[b["pv_raw"]] = s.last_counts
-                else:
-                    writes[b["pv"]] = pv
-            if all(seq.finished for seq in seqs):
+            temps = run.plant.temperatures()
+            writes, measured = run.sequence_and_measure(k, t, temps)
+            if all(seq.finished for seq in run.seqs):
                 break
-            if realtime:
-                target = wall0 + t / speed
-                delay = target - time.perf_counter()
-                if delay > 0:
-                    await asyncio.sleep(delay)
-                result.jitter_ms.append((time.perf_counter() - target) * 1e3)
-                await client.write_tags(writes)
-                values = await client.read_tags(read_names)
-            elif scenario.output_path == "pwm" and scenario.scans_per_step > 1:
-                values = await _pwm_step(client, writes, scenario.scans_per_step, read_names, pwm_names)
-            else:
-                values = await client.exchange(writes, scenario.scans_per_step, read_names)
-            waiting = any(not seq.finished and seq.phase.until is not None for seq in seqs)
-            if waiting or realtime or k % GAIN_READ_EVERY == 0:
-                values.update(await client.read_tags(status_names))
-                new_states = [int(values[seq.binding["state"]]) for seq in seqs]
-                error_ids = [
-                    int(values[seq.binding["error"]]) if seq.binding.has("error") else None for seq in seqs
-                ]
-            else:
-                new_states = list(states)  # type: ignore[arg-type]
-            if slow_names and (k % GAIN_READ_EVERY == 0 or new_states != states):
-                slow_values = await client.read_tags(slow_names)
-            for i, (z, seq, tr) in enumerate(zip(scenario.zones, seqs, traces, strict=True)):
-                b = seq.binding
-                states[i] = new_states[i]
-                if scenario.output_path == "pwm":
-                    heat = float(values[b["pwm_heat"]])  # duty over the step (1 sample per scan)
-                    cool = float(values[b["pwm_cool"]]) if b.has("pwm_cool") else 0.0
-                    u[z.channel] = PERCENT * (heat - cool)
-                    tr.pwm.append(round(heat) - round(cool))
-                else:
-                    u[z.channel] = float(values[b["y"]])
-                if b.has("y"):
-                    tr.y.append(float(values[b["y"]]))
-                tr.t.append(t)
-                tr.pv.append(measured[i])
-                tr.true_c.append(temps[z.channel])
-                tr.setpoint.append(seq.setpoint)
-                tr.u.append(u[z.channel])
-                tr.state.append(states[i])
-                if b.has("alarm"):
-                    tr.alarm.append(int(values[b["alarm"]]))
-                tr.phase.append(seq.phase.name if not seq.finished else "")
-                for role in GAIN_ROLES:
-                    if b.has(role):
-                        tr.gains.setdefault(role, []).append(float(slow_values[b[role]]))
-                if seq.trace.phases and not seq.finished:
-                    rec = seq.trace.phases[-1]
-                    for role in ("kp", "tn", "tv", "ks", "tu", "tg"):
-                        if b.has(role):
-                            rec.tuned[role] = float(slow_values[b[role]])
+            values, states = await run.exchange(k, t, writes)
+            run.record(t, temps, measured, values, states)
             c0 = time.perf_counter()
-            plant.step(u, dt, pdist)
-            plant_cpu += time.perf_counter() - c0
+            run.plant.step(run.u, dt, run.pdist)
+            run.result.plant_cpu_s += time.perf_counter() - c0
             k += 1
-            if progress is not None and k % 50 == 0:
+            if progress is not None and k % PROGRESS_EVERY == 0:
                 progress(t + dt, horizon)
     except (PlcError, RegisterMapError) as exc:
-        result.error = str(exc)
+        run.result.error = str(exc)
     finally:
-        end_t = k * dt
-        for tr in traces:
-            for rec in tr.phases:
-                if math.isnan(rec.t_end):
-                    rec.t_end = end_t
-                    if result.error and rec is tr.phases[-1]:
-                        rec.outcome = "aborted"
-        result.steps = k
-        result.plant_time_s = end_t
-        result.wall_s = time.perf_counter() - wall0
-        result.plant_cpu_s = plant_cpu
+        run.finish(k)
         if progress is not None:
-            progress(min(end_t, horizon), horizon)
-    return result
+            progress(min(run.result.plant_time_s, horizon), horizon)
+    return run.result

@@ -225,3 +225,20 @@ def test_real_time_overruns_are_counted():
         status = c.status()
     assert status.overruns >= 1
     assert status.scan_count <= 0.25 / (2.5 * INTERVAL_NS / 1e9) + 2  # no catch-up burst
+
+
+def test_random_requests_always_get_a_reply_and_never_close_the_connection(stepped):
+    """Seeded fuzz: known and unknown function codes with random payloads, any unit id."""
+    import random
+
+    _, plc, c = stepped
+    rng = random.Random(61131)
+    codes = [1, 2, 3, 4, 5, 6, 7, 8, 11, 12, 15, 16, 17, 20, 21, 22, 23, 24, 43, 0x83, 0]
+    with socket.create_connection(("127.0.0.1", plc.port), timeout=5) as sock:
+        for tid in range(1, 1500):
+            function = rng.choice([*codes, rng.randrange(256)])
+            pdu = bytes([function]) + bytes(rng.randrange(256) for _ in range(rng.randrange(12)))
+            sock.sendall(struct.pack(">HHHB", tid, 0, len(pdu) + 1, rng.randrange(256)) + pdu)
+            reply = _raw_reply(sock)
+            assert struct.unpack(">H", reply[:2])[0] == tid, pdu.hex()
+    assert c.status().version == control.CONTROL_BLOCK_VERSION

@@ -14,7 +14,6 @@ import threading
 from pathlib import Path
 
 from pymodbus.constants import ExcCodes
-from pymodbus.exceptions import ModbusIOException
 from pymodbus.pdu import ExceptionResponse, ModbusPDU
 from pymodbus.server import ModbusTcpServer
 from pymodbus.server.requesthandler import ServerRequestHandler
@@ -34,6 +33,9 @@ WRITE_SINGLE_COIL = 5
 FC5_FRAME_SIZE = MBAP_SIZE + 5  # function, address, value
 FC5_VALUE_SLICE = slice(MBAP_SIZE + 3, MBAP_SIZE + 5)
 COIL_VALUES = (0x0000, 0xFF00)
+MBAP_LENGTH_SLICE = slice(4, 6)
+MBAP_LENGTH_OFFSET = 6  # the MBAP length counts the bytes after itself
+EXCEPTION_FLAG = 0x80
 
 
 def load_program(program: ApplicationLike | Path | str, filename: str = "<source>") -> ApplicationLike:
@@ -51,8 +53,11 @@ def _refused_single_coil_frame(frame: bytes) -> int | None:
     """Length of a complete FC5 frame whose value is neither 0x0000 nor 0xFF00 (Modbus: exception 3)."""
     if len(frame) < FC5_FRAME_SIZE or frame[MBAP_SIZE] != WRITE_SINGLE_COIL:
         return None
+    frame_size = MBAP_LENGTH_OFFSET + int.from_bytes(frame[MBAP_LENGTH_SLICE], "big")
+    if len(frame) < frame_size:
+        return None
     value = int.from_bytes(frame[FC5_VALUE_SLICE], "big")
-    return FC5_FRAME_SIZE if value not in COIL_VALUES else None
+    return frame_size if value not in COIL_VALUES else None
 
 
 class _PlcRequestHandler(ServerRequestHandler):
@@ -71,7 +76,7 @@ class _PlcRequestHandler(ServerRequestHandler):
                 continue
             try:
                 used = TransactionManager.callback_data(self, rest, addr)
-            except ModbusIOException as exc:
+            except Exception as exc:  # noqa: BLE001 - undecodable request: exception reply, never a crash
                 self._answer_undecodable(exc, rest, addr)
                 return len(data)
             if self.last_pdu is not None:
@@ -81,7 +86,7 @@ class _PlcRequestHandler(ServerRequestHandler):
             consumed += used
         return consumed
 
-    def _answer_undecodable(self, exc: ModbusIOException, frame: bytes, addr: tuple | None) -> None:
+    def _answer_undecodable(self, exc: Exception, frame: bytes, addr: tuple | None) -> None:
         """A frame pymodbus cannot decode: bad quantity/length for a known code, or an unknown code."""
         function_code = frame[MBAP_SIZE] & 0x7F if len(frame) > MBAP_SIZE else 0
         known = function_code in self.server.decoder.list_function_codes()
@@ -95,21 +100,33 @@ class _PlcRequestHandler(ServerRequestHandler):
         self.server_send(response, addr)
 
     def _answer(self, pdu: ModbusPDU, addr: tuple | None) -> None:
+        response = self._response_to(pdu)
+        response.transaction_id = pdu.transaction_id
+        response.dev_id = pdu.dev_id
+        try:
+            self.server_send(response, addr)
+        except Exception as exc:  # noqa: BLE001 - e.g. pymodbus cannot encode its reply to a garbage request
+            code = pdu.function_code
+            log.warning("reply to function %d cannot be encoded (%s); exception 4 instead", code, exc)
+            failure = ExceptionResponse(code, ExcCodes.DEVICE_FAILURE, pdu.dev_id, pdu.transaction_id)
+            self.server_send(failure, addr)
+
+    def _response_to(self, pdu: ModbusPDU) -> ModbusPDU:
+        if pdu.function_code & EXCEPTION_FLAG:  # an exception response sent as a request
+            return ExceptionResponse(pdu.function_code, ExcCodes.ILLEGAL_FUNCTION)
         coroutine = pdu.datastore_update(self.server.context, pdu.dev_id)
         try:
             coroutine.send(None)
         except StopIteration as done:
-            response = done.value
-        except Exception:  # noqa: BLE001 - a request must never take the server down
-            log.exception("request function %d failed", pdu.function_code)
-            response = ExceptionResponse(pdu.function_code, ExcCodes.DEVICE_FAILURE)
-        else:  # the datastore never awaits; a PDU handler that does is not supported
-            coroutine.close()
-            log.error("request function %d needs an asynchronous handler; refused", pdu.function_code)
-            response = ExceptionResponse(pdu.function_code, ExcCodes.ILLEGAL_FUNCTION)
-        response.transaction_id = pdu.transaction_id
-        response.dev_id = pdu.dev_id
-        self.server_send(response, addr)
+            return done.value
+        except Exception as exc:  # noqa: BLE001 - a request must never take the server down
+            log.warning("request function %d failed: %s: %s", pdu.function_code, type(exc).__name__, exc)
+            log.debug("request function %d failed", pdu.function_code, exc_info=True)
+            return ExceptionResponse(pdu.function_code, ExcCodes.DEVICE_FAILURE)
+        # the datastore never awaits; a PDU handler that does is not supported
+        coroutine.close()
+        log.error("request function %d needs an asynchronous handler; refused", pdu.function_code)
+        return ExceptionResponse(pdu.function_code, ExcCodes.ILLEGAL_FUNCTION)
 
 
 class _PlcTcpServer(ModbusTcpServer):

@@ -60,6 +60,11 @@ def main_run(args: argparse.Namespace) -> int:
         raise UserError(str(exc)) from None
     if args.speed <= 0:
         raise UserError(f"--speed must be > 0, got {args.speed}")
+    if args.speed != 1.0 and not args.plc:
+        raise UserError(
+            "--speed N needs a PLC whose TASK interval was shortened N times (use --plc HOST:PORT); "
+            "the embedded soft-PLC runs the bundle's own interval"
+        )
     if args.plc:
         try:
             parse_host_port(args.plc)

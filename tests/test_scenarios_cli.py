@@ -40,6 +40,8 @@ def test_bad_plc_address_and_speed(capsys):
     assert "HOST:PORT" in capsys.readouterr().err
     assert main(["run", "--speed", "0", "--quiet"]) == 2
     assert "--speed" in capsys.readouterr().err
+    assert main(["run", "--realtime", "--speed", "10", "--quiet"]) == 2
+    assert "TASK interval" in capsys.readouterr().err
 
 
 @pytest.mark.skipif(not list(APP_DIR.glob("*.st")), reason="no application in plc/app yet")

@@ -242,3 +242,26 @@ def test_random_requests_always_get_a_reply_and_never_close_the_connection(stepp
             reply = _raw_reply(sock)
             assert struct.unpack(">H", reply[:2])[0] == tid, pdu.hex()
     assert c.status().version == control.CONTROL_BLOCK_VERSION
+
+
+def test_async_context_manager_with_pymodbus_async_client_in_the_same_loop():
+    import asyncio
+
+    from pymodbus.client import AsyncModbusTcpClient
+
+    from plc.runtime.server import SoftPlc
+
+    async def scenario() -> list[int]:
+        async with SoftPlc(FakeApplication(), port=0, stepped=True) as plc:
+            client = AsyncModbusTcpClient("127.0.0.1", port=plc.port)
+            await client.connect()
+            try:
+                await client.write_register(control.STEP, 4, device_id=1)
+                reply = await client.readwrite_registers(
+                    read_address=2048, read_count=2, write_address=control.STEP, values=[1], device_id=1
+                )
+                return reply.registers
+            finally:
+                client.close()
+
+    assert asyncio.run(scenario()) == [0, 5]

@@ -186,6 +186,17 @@ def test_pipelined_requests_are_answered_in_order(stepped):
     assert second[9:] == b"\0\0\0\x02"
 
 
+def wait_for(client: RawModbusClient, condition, timeout_s: float = 5.0) -> control.PlcStatus:
+    """Poll the control block until `condition(status)` holds (real-time tests on shared CPUs)."""
+    deadline = time.monotonic() + timeout_s
+    while True:
+        status = client.status()
+        if condition(status) or time.monotonic() > deadline:
+            assert condition(status), status
+            return status
+        time.sleep(0.01)
+
+
 def test_real_time_mode_scans_on_the_task_interval():
     app = FakeApplication()
     with SoftPlcThread(app, stepped=False) as plc, RawModbusClient("127.0.0.1", plc.port) as c:
@@ -195,20 +206,18 @@ def test_real_time_mode_scans_on_the_task_interval():
         elapsed = time.monotonic() - start
         assert not status.stepped
         expected = elapsed / (INTERVAL_NS / 1e9)
-        assert expected * 0.5 <= status.scan_count <= expected + 3
+        assert expected * 0.3 <= status.scan_count <= expected + 3  # lower bound loose: shared CPUs
         assert status.time_ns == status.scan_count * INTERVAL_NS
         assert exception_code(c.step, 1) == ILLEGAL_ADDRESS  # no stepping in real time
         c.write_register(1026, 0)  # fault in real time: status readable, server alive
-        time.sleep(0.05)
-        status = c.status()
-        assert status.faulted and status.fault_code == control.FAULT_DIVISION_BY_ZERO
+        status = wait_for(c, lambda s: s.faulted)
+        assert status.fault_code == control.FAULT_DIVISION_BY_ZERO
         frozen = status.scan_count
         time.sleep(0.05)
         assert c.status().scan_count == frozen
         c.write_register(1026, 1)
         c.reset_fault()
-        time.sleep(0.05)
-        assert c.status().scan_count > frozen
+        wait_for(c, lambda s: s.scan_count > frozen)
 
 
 class SlowApplication(FakeApplication):

@@ -50,7 +50,10 @@ def load_for_cli(file: str | None) -> ApplicationLike:
 
 
 async def serve(app: ApplicationLike, host: str, port: int, stepped: bool) -> int:
-    plc = SoftPlc(app, host=host, port=port, stepped=stepped)
+    try:
+        plc = SoftPlc(app, host=host, port=port, stepped=stepped)
+    except ValueError as exc:
+        raise UserError(str(exc)) from exc
     loop = asyncio.get_running_loop()
     try:
         await plc.start()

@@ -173,6 +173,8 @@ class SoftPlc:
     def __init__(self, program: ApplicationLike | Path | str, host: str = "127.0.0.1", port: int = 0,
                  stepped: bool = False):
         app = load_program(program)
+        if int(app.interval_ns) <= 0:
+            raise ValueError(f"the program's task interval must be positive, not {app.interval_ns} ns")
         self.engine = PlcEngine(app, stepped)
         self.image = ModbusImage(app.located)
         self.host = host

@@ -26,6 +26,8 @@ from plc.checker.symbols import (
 )
 from plc.checker.typing_rules import ExpressionTyper, compatibility
 from plc.checker.vocabulary import (
+    ANY_INT,
+    ANY_REAL,
     GENERIC_CONVERSIONS,
     TWINCAT_OPERATORS,
     UNSUPPORTED_TYPES,
@@ -499,10 +501,27 @@ class FileChecker:
             )
 
     # ---- TYPE rules ----------------------------------------------------------------------------
+    def struct_default_rules(self, body: Node) -> None:
+        """Default values of STRUCT members against the member type (same rule as initial values)."""
+        for fld in body.named_children:
+            default = fld.child_by_field_name("default") if fld.type == "structure_field" else None
+            if default is None:
+                continue
+            ftype = self.symbols.resolve(type_of(fld.child_by_field_name("type"), self.ps))
+            value = default
+            if value.type == "unary_expression":
+                value = value.child_by_field_name("operand") or value
+            literal = {"integer_literal": ANY_INT, "real_literal": ANY_REAL}.get(value.type)
+            why = compatibility(ftype, literal) if isinstance(ftype, str) and literal else None
+            if why:
+                self.report(default, f"incompatible initial value: {why}")
+
     def type_definition_rules(self, node: Node) -> None:
         body = node.child_by_field_name("definition")
         if body is None:
             return
+        if body.type == "structure_type_inline":
+            self.struct_default_rules(body)
         if body.type == "enumerated_type_inline":
             for en in body.named_children:
                 if en.type == "enumerator" and en.child_by_field_name("value") is not None:

@@ -54,4 +54,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    # run through the package module so UserError is the same class the sub-commands raise
+    from plc.cli import main as _main
+
+    raise SystemExit(_main())

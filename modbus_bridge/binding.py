@@ -18,8 +18,15 @@ ST_LIB = Path(__file__).resolve().parents[1] / "st_lib"
 # role -> name patterns; "{n}" is the zone number. The first pattern that matches a tag wins.
 ROLE_PATTERNS: dict[str, tuple[str, ...]] = {
     "pv": (r"fPvZone{n}", r"fXZone{n}", r"fActualZone{n}", r"fPv{n}", r"fX{n}"),
-    "pv_raw": (r"nPvRawZone{n}", r"nRawZone{n}", r"nAdcZone{n}", r"nRaw{n}", r"w\w*RawZone{n}"),
-    "pv_select": (r"bUseRawZone{n}", r"bPvRawZone{n}", r"nPvSourceZone{n}", r"bRawInputZone{n}"),
+    # raw counts a Modbus client may write (the application's %IW hardware input is read-only)
+    "pv_raw": (r"nPvRawModbusZone{n}", r"nPvRawZone{n}", r"nRawZone{n}", r"nAdcZone{n}", r"nRaw{n}"),
+    "pv_select": (r"bUseRawZone{n}", r"bPvRawZone{n}", r"bRawInputZone{n}"),
+    "raw_from_modbus": (r"bRawFromModbusZone{n}",),
+    "ntc_r25": (r"fNtcR25Zone{n}",),
+    "ntc_beta": (r"fNtcBetaZone{n}",),
+    "ntc_pullup": (r"fRPullupZone{n}",),
+    "pt100_res_low": (r"fRawResLowZone{n}",),
+    "pt100_res_high": (r"fRawResHighZone{n}",),
     "setpoint": (r"fSetpointZone{n}", r"fWZone{n}", r"fSpZone{n}", r"fW{n}"),
     "mode": (r"nModeZone{n}", r"nCtrlModeZone{n}", r"nMode{n}"),
     "manual": (r"fYManualZone{n}", r"fManualZone{n}", r"fYManual{n}"),
@@ -44,6 +51,12 @@ ROLE_PATTERNS: dict[str, tuple[str, ...]] = {
     "tv_eff": (r"fFuzzyTvZone{n}", r"fTvEffZone{n}", r"fTvEffectiveZone{n}"),
 }
 REQUIRED_ROLES = ("pv", "setpoint", "mode", "y", "state")
+# the application's raw inputs span counts 0 .. 32767 (its nPvRaw register comment; nRawFullScale in ST)
+RAW_FULL_SCALE = 32767
+RAW_SENSOR_ROLES = {
+    "ntc": ("ntc_r25", "ntc_beta", "ntc_pullup"),
+    "pt100": ("pt100_res_low", "pt100_res_high"),
+}
 GAIN_ROLES = ("kp", "tn", "tv", "td", "ks", "tu", "tg", "kp_eff", "tn_eff", "tv_eff")
 
 

@@ -17,7 +17,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from .binding import ControllerCodes, ZoneBinding
+from .binding import RAW_FULL_SCALE, RAW_SENSOR_ROLES, ControllerCodes, ZoneBinding
 from .client import PlcClient, PlcError
 from .plants import Plant, PlantDisturbance, ZoneDisturbance
 from .regmap import RegisterMap, RegisterMapError
@@ -234,6 +234,19 @@ async def _pwm_step(
     return values
 
 
+def raw_sensor_parameters(b: ZoneBinding, adc) -> dict[str, float]:
+    """The application's raw conversion registers (when it has them) set to the simulated front end, so
+    both ends agree: NTC R25, beta and pull-up; PT100 resistance at count 0 and at full scale."""
+    values = {
+        "ntc_r25": adc.r25_ohm,
+        "ntc_beta": adc.beta_k,
+        "ntc_pullup": adc.pullup_ohm,
+        "pt100_res_low": adc.ohm_at_zero,
+        "pt100_res_high": adc.ohm_at_zero + RAW_FULL_SCALE * adc.ohm_per_count,
+    }
+    return {b[role]: values[role] for role in RAW_SENSOR_ROLES.get(adc.kind, ()) if b.has(role)}
+
+
 def required_roles(scenario: Scenario, zone: Zone) -> list[str]:
     roles = ["pv", "setpoint", "mode", "state"]
     roles.append("pwm_heat" if scenario.output_path == "pwm" else "y")
@@ -258,6 +271,16 @@ def check_bindings(
         b = bindings[zone.plc_zone]
         for role in required_roles(scenario, zone):
             b[role]
+        if scenario.pv_path == "raw":
+            if not regmap[b["pv_raw"]].writable:
+                raise RegisterMapError(
+                    f"zone '{zone.name}': raw input {b['pv_raw']} is read-only for a Modbus client"
+                )
+            if b.has("ntc_r25") and zone.sensor.adc.full_scale != RAW_FULL_SCALE:
+                raise RegisterMapError(
+                    f"zone '{zone.name}': the application's raw inputs span 0..{RAW_FULL_SCALE}: "
+                    f"set sensor bits = {RAW_FULL_SCALE.bit_length()}"
+                )
         for ph in zone.phases:
             for tag in ph.writes:
                 client_tag = regmap[tag]  # raises "tag ... is not in the register map"
@@ -339,8 +362,12 @@ class _LoopCloser:
         temps = self.plant.temperatures()
         for z, s, seq in zip(self.scenario.zones, self.sensors, self.seqs, strict=True):
             s.reset(temps[z.channel])
-            if seq.binding.has("pv_select"):
-                writes[seq.binding["pv_select"]] = self.scenario.pv_path == "raw"
+            raw = self.scenario.pv_path == "raw"
+            for role in ("pv_select", "raw_from_modbus"):
+                if seq.binding.has(role):
+                    writes[seq.binding[role]] = raw
+            if raw:
+                writes.update(raw_sensor_parameters(seq.binding, z.sensor.adc))
             seq.start(0.0, temps[z.channel], writes)
         if writes:
             await self.client.write_tags(writes)

@@ -248,6 +248,7 @@ def _sensor(tab: _Table) -> SensorSpec:
         kind=adc_kind,
         bits=tab.get("bits", int, 16, minimum=MIN_ADC_BITS, maximum=MAX_ADC_BITS),
         ohm_per_count=tab.get("ohm_per_count", float, 1.0 / 16.0, above=0.0),
+        ohm_at_zero=tab.get("ohm_at_zero", float, 0.0, minimum=0.0),
         pullup_ohm=tab.get("pullup_ohm", float, 4700.0, above=0.0),
         r25_ohm=tab.get("r25_ohm", float, 100_000.0, above=0.0),
         beta_k=tab.get("beta_k", float, 3950.0, above=0.0),

@@ -5,7 +5,10 @@ first-order sensor lag, seeded Gaussian noise, then the raw ADC path (resistance
 quantised) and back to °C, so ADC quantisation shows in the process value exactly as it would
 through a real input card. `raw_counts` is what the "raw input" path of the application receives.
 
-Sources: IEC 60751 / seed 000 (PT100 CVD coefficients A, B, C); seed 002 (100 kΩ NTC hot end);
+Sources: IEC 60751 (ITS-90 PT100 coefficients A, B, C: the simulated sensor is a standard one; seed 000
+quotes the older 3.90802e-3 / -5.80195e-7 / -4.2735e-12 set, which the library uses, so a raw-path PLC
+reads 0.04 °C high at 200 °C and 0.75 °C at 850 °C, as a real mismatched calibration would); seed 002
+(100 kΩ NTC hot end);
 the β equation 1/T = 1/T0 + ln(R/R0)/β.
 """
 
@@ -22,7 +25,7 @@ OPEN_READING_C = -KELVIN_OFFSET
 SHORT_READING_C = 1000.0
 SENSOR_FAULTS = ("none", "open", "short")
 
-# IEC 60751 Callendar–Van Dusen coefficients (seed 000 quotes the same values).
+# IEC 60751 (ITS-90) Callendar–Van Dusen coefficients.
 CVD_A = 3.9083e-3
 CVD_B = -5.775e-7
 CVD_C = -4.183e-12
@@ -73,13 +76,14 @@ def ntc_temperature(resistance_ohm: float, r25_ohm: float, beta_k: float, t0_c: 
 
 @dataclass
 class AdcFrontEnd:
-    """Raw input path. kind "pt100": counts = R / ohm_per_count (a resistance-measuring input card,
-    e.g. 1/16 Ω per count). kind "ntc": a pull-up divider read by an ADC, counts = full * R/(R+Rpull).
-    kind "none": no quantisation (the process value is written as REAL as measured)."""
+    """Raw input path. kind "pt100": counts = (R - ohm_at_zero) / ohm_per_count (a resistance-measuring
+    input card, e.g. 1/16 Ω per count). kind "ntc": a pull-up divider read by an ADC,
+    counts = full * R/(R+Rpull). kind "none": no quantisation (the PV is written as REAL as measured)."""
 
     kind: str = "none"
     bits: int = 16
     ohm_per_count: float = 1.0 / 16.0
+    ohm_at_zero: float = 0.0  # pt100: resistance at count 0 (an input card with an offset range)
     pullup_ohm: float = 4700.0
     r25_ohm: float = 100_000.0
     beta_k: float = 3950.0
@@ -90,7 +94,7 @@ class AdcFrontEnd:
 
     def to_counts(self, temp_c: float) -> int:
         if self.kind == "pt100":
-            counts = round(pt100_resistance(temp_c) / self.ohm_per_count)
+            counts = round((pt100_resistance(temp_c) - self.ohm_at_zero) / self.ohm_per_count)
         elif self.kind == "ntc":
             r = ntc_resistance(temp_c, self.r25_ohm, self.beta_k)
             counts = round(self.full_scale * r / (r + self.pullup_ohm))
@@ -100,7 +104,7 @@ class AdcFrontEnd:
 
     def from_counts(self, counts: int) -> float:
         if self.kind == "pt100":
-            return pt100_temperature(counts * self.ohm_per_count)
+            return pt100_temperature(self.ohm_at_zero + counts * self.ohm_per_count)
         if self.kind == "ntc":
             c = min(max(counts, 1), self.full_scale - 1)
             r = self.pullup_ohm * c / (self.full_scale - c)

@@ -229,3 +229,68 @@ def test_model_mismatch_changes_the_plant_mid_run():
     rise = {m.phase: m.values["rise_time_s"] for m in ma if m.kind == "step"}
     rise_slow = {m.phase: m.values["rise_time_s"] for m in mb if m.kind == "step"}
     assert rise_slow["step"] > 1.5 * rise["step"]  # a 3x slower plant rises much more slowly
+
+
+RAW_SCENARIO = """
+name = "raw path"
+description = "both zones through the application's raw inputs"
+[plc]
+pv_path = "raw"
+[plant]
+model = "tclab"
+[[zone]]
+name = "ntc zone"
+plc_zone = 1
+channel = 0
+[zone.sensor]
+adc = "ntc"
+bits = 15
+noise_sigma_c = 0.1
+[[zone.phase]]
+name = "hold"
+mode = "ACTIVE"
+setpoint_c = 30.0
+duration_s = 5.0
+[[zone]]
+name = "pt100 zone"
+plc_zone = 2
+channel = 1
+[zone.sensor]
+adc = "pt100"
+bits = 15
+ohm_at_zero = 18.52
+ohm_per_count = 0.011352
+noise_sigma_c = 0.1
+[[zone.phase]]
+name = "hold"
+mode = "ACTIVE"
+setpoint_c = 30.0
+duration_s = 5.0
+"""
+
+
+def test_raw_path_through_the_application(tmp_path):
+    """The application converts the harness's ADC counts (NTC divider, PT100 card) back to the same
+    temperature the simulated sensor produced: both ends share the sensor parameters."""
+    app = HarnessSetup.default()
+    if not app.regmap.find(r"nPvRawModbusZone[12]"):
+        pytest.skip("the application has no Modbus-writable raw inputs (nPvRawModbusZone<n>)")
+    path = tmp_path / "raw.toml"
+    path.write_text(RAW_SCENARIO, encoding="utf-8")
+    sc = load_scenario(path)
+
+    async def go():
+        async with server.SoftPlc(app.program_text(), port=0, stepped=True) as soft:
+            async with PlcClient("127.0.0.1", soft.port, app.regmap) as client:
+                await client.step(2)
+                result = await close_loop(sc, Variant("raw"), client, app.bindings(sc), app.codes)
+                used = await client.read_tags(["fXUsedZone1", "fXUsedZone2", "nPvRawModbusZone1"])
+                return result, used
+
+    result, used = asyncio.run(go())
+    assert result.error is None, result.error
+    assert used["nPvRawModbusZone1"] > 0
+    assert used["fXUsedZone1"] == pytest.approx(result.zones[0].pv[-1], abs=1e-3)
+    # the simulated PT100 follows IEC 60751 (A = 3.9083e-3, B = -5.775e-7); the library converts with seed
+    # 000's older coefficients (3.90802e-3, -5.80195e-7): 0.002 °C apart at 21 °C, a real calibration offset
+    assert used["fXUsedZone2"] == pytest.approx(result.zones[1].pv[-1], abs=5e-3)

@@ -27,6 +27,7 @@ class LexicalScan:
     blanked: str  # same length as text
     code: list[bool]  # True where the character is code (not comment / string / pragma)
     findings: list[Finding] = field(default_factory=list)
+    pragmas: list[int] = field(default_factory=list)  # character offsets of `{...}` pragmas (not `{{ C }}`)
 
 
 def _blank(chars: list[str], start: int, end: int) -> None:
@@ -39,6 +40,7 @@ def scan(text: str) -> LexicalScan:
     chars = list(text)
     code = [True] * len(text)
     findings: list[Finding] = []
+    pragmas: list[int] = []
     i, n = 0, len(text)
     while i < n:
         c = text[i]
@@ -80,6 +82,7 @@ def scan(text: str) -> LexicalScan:
         elif c == "{":
             end = text.find("}", i + 1)
             end = n if end < 0 else end + 1
+            pragmas.append(i)
             _mark(code, i, end)
             i = end
         elif c in "'\"":
@@ -91,7 +94,7 @@ def scan(text: str) -> LexicalScan:
             i = end
         else:
             i += 1
-    result = LexicalScan(text=text, blanked="".join(chars), code=code, findings=findings)
+    result = LexicalScan(text=text, blanked="".join(chars), code=code, findings=findings, pragmas=pragmas)
     result.findings.extend(_twincat_constructs(result))
     result.findings.sort(key=lambda f: f.offset)
     return result

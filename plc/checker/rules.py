@@ -111,6 +111,7 @@ class FileChecker:
             self.report_offset(finding.offset, finding.message)
         self.text_rules()
         self.missing_type_semicolon_rule()
+        self.pragma_rules()
         # a construct recognised above explains the parse error on its line: report it only once
         specific = {d.line for d in self.diagnostics}
         self.diagnostics.extend(d for d in self.ps.syntax_errors() if d.line not in specific)
@@ -157,6 +158,29 @@ class FileChecker:
                     "assign the elements in the body",
                 )
 
+    def pragma_rules(self) -> None:
+        """Rows pragma_attr_pou (top level: accepted), pragma_attr_var and pragma_attr_body (refused).
+
+        The parser blanks pragmas, so their place is found from the enclosing tree node."""
+        text, root = self.lexical.text, self.ps.tree.root_node
+        for offset in self.lexical.pragmas:
+            byte = len(text[:offset].encode("utf-8"))
+            cur: Node | None = root.descendant_for_byte_range(byte, byte)
+            while cur is not None and cur.type not in VAR_SECTIONS and cur.type not in POU_KINDS:
+                cur = cur.parent
+            if cur is None:
+                continue
+            if cur.type in VAR_SECTIONS:
+                self.report_offset(
+                    offset, "pragma inside a VAR block (attribute on a variable) is refused by MatIEC"
+                )
+            else:
+                self.report_offset(
+                    offset,
+                    "pragma inside a POU body is copied into the generated C, which then "
+                    "fails to compile; use (* *) comments",
+                )
+
     def missing_type_semicolon_rule(self) -> None:
         """Rows end_type_semicolon / enum_no_semicolon: ';' after END_STRUCT or ')' inside TYPE."""
         for node in descendants(self.ps.tree.root_node):
@@ -183,16 +207,6 @@ class FileChecker:
                 and not (node.parent is not None and node.parent.type == "ERROR")
             ):
                 self.report(node, "empty statement ';' is refused by MatIEC")
-        elif kind == "pragma":
-            parent = node.parent
-            if parent is not None and parent.type in VAR_SECTIONS:
-                self.report(node, "pragma inside a VAR block (attribute on a variable) is refused by MatIEC")
-            elif parent is not None and parent.type != "source_file":
-                self.report(
-                    node,
-                    "pragma inside a POU body is copied into the generated C, which then fails "
-                    "to compile; use (* *) comments",
-                )
         elif kind == "binary_expression":
             op = node.child_by_field_name("operator")
             if op is not None and op.type == "**":

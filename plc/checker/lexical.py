@@ -136,7 +136,7 @@ _TEXT_RULES: list[tuple[re.Pattern[str], str]] = [
     (re.compile(r"\bVAR_STAT\b", re.I), "VAR_STAT is TwinCAT-only; MatIEC refuses it"),
     (re.compile(r"\bVAR_INST\b", re.I), "VAR_INST is TwinCAT-only; MatIEC refuses it"),
     (
-        re.compile(r"\bVAR\s+PERSISTENT\b|\bPERSISTENT\b(?=\s*$)", re.I | re.M),
+        re.compile(r"\bVAR(?:_GLOBAL)?(?:\s+RETAIN)?\s+PERSISTENT\b", re.I),
         "VAR PERSISTENT is TwinCAT-only; MatIEC knows VAR RETAIN",
     ),
     (

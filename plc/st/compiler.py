@@ -1993,7 +1993,7 @@ def _namespace() -> dict:
 
 
 def _parse_all(sources: list[tuple[str, str]]) -> list[ParsedSource]:
-    return [parse_source(text, filename) for filename, text in sources]
+    return [parse_source(text, filename, blank_pragmas=True) for filename, text in sources]
 
 
 def typecheck(sources: list[tuple[str, str]]) -> list[Diagnostic]:

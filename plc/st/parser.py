@@ -6,6 +6,7 @@ rewrites them before parsing, so byte offsets, lines and columns stay those of t
 * `E_Type#Member` (typed enum literal) -> `E_Type_Member`, remembered in `enum_literals`
   by the offset of the identifier;
 * underscores inside TIME literals (`T#1s_500ms`) are dropped and padded with blanks;
+* pragmas `{...}` / `{{ C }}` are blanked when the caller asks (the soft-PLC runs no C code);
 * structure / array initialisers inside a TYPE block (`b : ST_Pt := (x := 1.0);`,
   `T_A : ARRAY[0..3] OF INT := [1, 2(3)];`) are blanked and kept in `type_initializers`
   by the offset of their `:=`; the compiler parses them on their own.
@@ -143,7 +144,7 @@ class ParsedSource:
         return out
 
 
-def _rewrite(text: str) -> tuple[str, dict[int, tuple[str, str]], dict[int, str]]:
+def _rewrite(text: str, blank_pragmas: bool) -> tuple[str, dict[int, tuple[str, str]], dict[int, str]]:
     mask = _code_mask(text)
     chars = list(text)
     enum_literals: dict[int, tuple[str, str]] = {}
@@ -165,7 +166,7 @@ def _rewrite(text: str) -> tuple[str, dict[int, tuple[str, str]], dict[int, str]
         enum_literals[m.start()] = (m.group(1), m.group(2))
 
     # pragmas: `{attribute ...}` and OpenPLC's `{{ C code }}` do not change the ST semantics we run
-    k = 0
+    k = 0 if blank_pragmas else len(text)
     while k < len(text):
         if mask[k] and text[k] == "{":
             depth, j = 0, k
@@ -207,8 +208,9 @@ def _byte_offsets(text: str, offsets: dict) -> dict:
     return {len(text[:k].encode("utf-8")): v for k, v in offsets.items()}
 
 
-def parse_source(text: str, filename: str = "<string>") -> ParsedSource:
-    rewritten, enum_literals, type_inits = _rewrite(text)
+def parse_source(text: str, filename: str = "<string>", blank_pragmas: bool = False) -> ParsedSource:
+    """Parse; with blank_pragmas the runtime ignores `{...}` pragmas (the checker wants to see them)."""
+    rewritten, enum_literals, type_inits = _rewrite(text, blank_pragmas)
     src = rewritten.encode("utf-8")
     tree = _parser().parse(src)
     return ParsedSource(

@@ -243,3 +243,13 @@ def test_seeded_type_errors_in_the_corpus_are_found() -> None:
     print("seeded type errors (found, seeded):", counts)
     assert counts["conversion dropped"][1] > 10 and counts["real literal written as integer"][1] > 30
     assert not unexplained, "\n".join(unexplained)
+
+
+def test_positions_are_tree_sitter_byte_columns_with_non_ascii_text() -> None:
+    src = (
+        "PROGRAM P_X\n  VAR\n    n : INT;\n  END_VAR\n"
+        "  n := n + 1; // °C\n  (* °C *) n := n + 1.5; {attribute}\nEND_PROGRAM\n"
+    )
+    found = [(d.line, d.col, d.message.split(" ")[0]) for d in check_sources([("u.st", src)])]
+    # line 6: '  (* °C *) n := ' is 17 bytes (° is 2), so the expression starts at byte column 18
+    assert found == [(5, 15, "line"), (6, 18, "data"), (6, 27, "pragma")]

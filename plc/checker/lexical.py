@@ -24,7 +24,7 @@ class Finding:
 @dataclass
 class LexicalScan:
     text: str
-    blanked: str  # same length as text
+    blanked: str  # same byte length as text (UTF-8), same lines
     code: list[bool]  # True where the character is code (not comment / string / pragma)
     findings: list[Finding] = field(default_factory=list)
     pragmas: list[int] = field(default_factory=list)  # character offsets of `{...}` pragmas (not `{{ C }}`)
@@ -33,7 +33,7 @@ class LexicalScan:
 def _blank(chars: list[str], start: int, end: int) -> None:
     for k in range(start, end):
         if chars[k] not in "\r\n":
-            chars[k] = " "
+            chars[k] = " " * len(chars[k].encode("utf-8"))  # keep byte offsets for tree-sitter
 
 
 def scan(text: str) -> LexicalScan:

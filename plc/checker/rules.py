@@ -102,7 +102,7 @@ class FileChecker:
     def report_offset(self, offset: int, message: str) -> None:
         text = self.lexical.text
         line = text.count("\n", 0, offset) + 1
-        col = offset - (text.rfind("\n", 0, offset) + 1) + 1
+        col = len(text[text.rfind("\n", 0, offset) + 1 : offset].encode("utf-8")) + 1  # bytes, as tree-sitter
         self.diagnostics.append(Diagnostic(self.ps.filename, line, col, message))
 
     # ---- driver --------------------------------------------------------------------------------

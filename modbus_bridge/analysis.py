@@ -36,6 +36,9 @@ TUNE_KEYS = {
     "kp": "tuned_kp_pct_per_c",
     "tn": "tuned_tn_s",
     "tv": "tuned_tv_s",
+    "kp_cool": "tuned_kp_cool_pct_per_c",
+    "tn_cool": "tuned_tn_cool_s",
+    "tv_cool": "tuned_tv_cool_s",
 }
 
 

@@ -43,6 +43,9 @@ ROLE_PATTERNS: dict[str, tuple[str, ...]] = {
     "tn": (r"fTnZone{n}",),
     "tv": (r"fTvZone{n}",),
     "td": (r"fTdZone{n}",),
+    "kp_cool": (r"fKpCoolZone{n}",),
+    "tn_cool": (r"fTnCoolZone{n}",),
+    "tv_cool": (r"fTvCoolZone{n}",),
     "ks": (r"fKsZone{n}",),
     "tu": (r"fTuZone{n}",),
     "tg": (r"fTgZone{n}",),
@@ -57,7 +60,6 @@ RAW_SENSOR_ROLES = {
     "ntc": ("ntc_r25", "ntc_beta", "ntc_pullup"),
     "pt100": ("pt100_res_low", "pt100_res_high"),
 }
-GAIN_ROLES = ("kp", "tn", "tv", "td", "ks", "tu", "tg", "kp_eff", "tn_eff", "tv_eff")
 
 
 def enum_members(type_name: str, lib_dir: Path | None = None) -> list[str]:

@@ -25,8 +25,21 @@ from .scenario import Phase, Scenario, Variant, Zone
 from .sensors import Sensor
 
 PERCENT = 100.0
-GAIN_ROLES = ("kp_eff", "tn_eff", "tv_eff", "kp", "tn", "tv", "ks", "tu", "tg")
-TUNED_ROLES = ("kp", "tn", "tv", "ks", "tu", "tg")
+GAIN_ROLES = (
+    "kp_eff",
+    "tn_eff",
+    "tv_eff",
+    "kp",
+    "tn",
+    "tv",
+    "kp_cool",
+    "tn_cool",
+    "tv_cool",
+    "ks",
+    "tu",
+    "tg",
+)
+TUNED_ROLES = ("kp", "tn", "tv", "kp_cool", "tn_cool", "tv_cool", "ks", "tu", "tg")
 PROGRESS_EVERY = 50  # plant steps between progress reports
 # plant steps between reads of gains, identified plant, state and error id (1 s at dt = 0.1 s); the state
 # is read every step while a zone waits for an event (until = "tuned")

@@ -253,3 +253,20 @@ def test_positions_are_tree_sitter_byte_columns_with_non_ascii_text() -> None:
     found = [(d.line, d.col, d.message.split(" ")[0]) for d in check_sources([("u.st", src)])]
     # line 6: '  (* °C *) n := ' is 17 bytes (° is 2), so the expression starts at byte column 18
     assert found == [(5, 15, "line"), (6, 18, "data"), (6, 27, "pragma")]
+
+
+def test_cli_directory_argument(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "bad.st").write_text(BAD_PROGRAM, encoding="utf-8")
+    (tmp_path / "notes.txt").write_text("fR := 1; // not ST", encoding="utf-8")
+    assert main(["check", str(tmp_path)]) == 1
+    lines = capsys.readouterr().out.splitlines()
+    assert lines and all(line.startswith(str(tmp_path / "sub" / "bad.st") + ":") for line in lines)
+
+
+def test_openplc_bundle_is_clean() -> None:
+    """The single file uploaded to OpenPLC (`thermost bundle`) passes the checker."""
+    bundle = pytest.importorskip("plc.bundle")
+    text = bundle.bundle_text()
+    diagnostics = check_sources([("thermost_openplc.st", text)])
+    assert diagnostics == [], "\n".join(map(str, diagnostics[:20]))

@@ -1,14 +1,16 @@
 """MatIEC-strict checker: refuses what OpenPLC v3's iec2c refuses (see docs/checker.md).
 
 `check_sources([(filename, text), ...])` returns sorted diagnostics (`file:line:col: message`);
-`main_check(args)` is the `thermost check FILE...` sub-command: exit 0 when clean, 1 when any
-error, 2 when a file cannot be read.
+`main_check(args)` is the `thermost check FILE...` sub-command (a directory stands for its .st
+files): exit 0 when clean, 1 when any error, 2 when a file cannot be read.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+from pathlib import Path
 
 from plc.checker.lexical import scan
 from plc.checker.rules import FileChecker
@@ -31,9 +33,20 @@ def check_sources(sources: list[tuple[str, str]]) -> list[Diagnostic]:
     return sorted(found, key=lambda d: (d.filename, d.line, d.col, d.message))
 
 
+def _expand(paths: list[str]) -> list[str]:
+    """Files as given; a directory stands for the .st files below it (sorted)."""
+    out: list[str] = []
+    for path in paths:
+        if os.path.isdir(path):
+            out.extend(sorted(str(p) for p in Path(path).rglob("*.st")))
+        else:
+            out.append(path)
+    return out
+
+
 def main_check(args: argparse.Namespace) -> int:
     sources: list[tuple[str, str]] = []
-    for name in args.files:
+    for name in _expand(args.files):
         try:
             with open(name, encoding="utf-8") as handle:
                 sources.append((name, handle.read()))

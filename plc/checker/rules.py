@@ -59,7 +59,11 @@ _ARRAY_OF_STRUCT_INIT = re.compile(r"\bOF\s+[A-Za-z_]\w*\s*:=\s*\[[^\]]*?\(\s*[A
 _DECLARED_NAMES = re.compile(
     r"^[ \t]*([A-Za-z_]\w*(?:[ \t]*,[ \t]*[A-Za-z_]\w*)*)[ \t]*(?:AT[ \t]+%\S+[ \t]*)?:(?!=)", re.I | re.M
 )
-_VAR_REGION = re.compile(r"\b(?:VAR\w*|STRUCT)\b(.*?)\bEND_(?:VAR|STRUCT)\b", re.I | re.S)
+_VAR_REGION = re.compile(
+    r"\b(?:VAR|VAR_INPUT|VAR_OUTPUT|VAR_IN_OUT|VAR_TEMP|VAR_EXTERNAL|VAR_GLOBAL|VAR_STAT|VAR_INST|STRUCT)\b"
+    r"(.*?)\bEND_(?:VAR|STRUCT)\b",
+    re.I | re.S,
+)
 
 
 def descendants(node: Node) -> Iterator[Node]:
@@ -452,8 +456,8 @@ class FileChecker:
                     left, right = node.child_by_field_name("left"), node.child_by_field_name("right")
                     if left is not None and right is not None:
                         typer.check_assignment(left, right, node)  # MatIEC points at the statement
-                    if left is not None and left.type == "identifier":
-                        self.undeclared_target_rule(pou, left)
+                    if left is not None and left.type == "identifier" and not pou.node.has_error:
+                        self.undeclared_target_rule(pou, left)  # declarations all parsed
                 elif kind == "invocation_statement":
                     for call in node.named_children:
                         if call.type == "call_expression":

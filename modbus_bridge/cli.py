@@ -49,9 +49,19 @@ def main_regmap(args: argparse.Namespace) -> int:
 
 
 def main_run(args: argparse.Namespace) -> int:
+    from .analysis import run_metrics
+    from .client import PlcError
     from .loop import check_bindings
     from .report import slug, summary_rows, text_table, write_reports
-    from .runner import HarnessSetup, ProgressBar, parse_host_port, run_variants, run_variants_parallel
+    from .runner import (
+        FleetJob,
+        HarnessSetup,
+        ProgressBar,
+        parse_host_port,
+        run_fleet,
+        run_variants,
+        run_variants_parallel,
+    )
 
     t_start = time.perf_counter()
     try:
@@ -65,11 +75,17 @@ def main_run(args: argparse.Namespace) -> int:
             "--speed N needs a PLC whose TASK interval was shortened N times (use --plc HOST:PORT); "
             "the embedded soft-PLC runs the bundle's own interval"
         )
-    if args.plc:
+    plcs = args.plc or []
+    for address in plcs:
         try:
-            parse_host_port(args.plc)
+            parse_host_port(address)
         except ValueError as exc:
             raise UserError(str(exc)) from None
+    if len(plcs) > 1 and len(plcs) != len(scenario.variants):
+        raise UserError(
+            f"{len(plcs)} PLCs for {len(scenario.variants)} variant(s): give one --plc, or one per "
+            f"variant ({', '.join(v.name for v in scenario.variants)})"
+        )
     try:
         setup = HarnessSetup.default()
         check_bindings(scenario, setup.bindings(scenario), setup.codes, setup.regmap)
@@ -79,14 +95,25 @@ def main_run(args: argparse.Namespace) -> int:
     bar = ProgressBar(scenario.name)
     bar.enabled = not args.quiet
     try:
-        if args.plc or args.realtime:
+        if len(plcs) > 1:  # variant i on PLC i, all at once (side by side on real hardware)
+            jobs = [FleetJob(scenario, address, i) for i, address in enumerate(plcs)]
+            results = asyncio.run(run_fleet(jobs, setup, speed=args.speed))
+            runs = [(r, run_metrics(r)) for r in results]
+        elif plcs or args.realtime:
             runs = asyncio.run(
                 run_variants(
-                    scenario, setup, plc=args.plc, realtime=args.realtime, speed=args.speed, progress=bar
+                    scenario,
+                    setup,
+                    plc=plcs[0] if plcs else None,
+                    realtime=args.realtime,
+                    speed=args.speed,
+                    progress=bar,
                 )
             )
         else:  # embedded stepped soft-PLC: controller variants run side by side in parallel processes
             runs = run_variants_parallel(scenario, setup, progress=bar, plot_dir=out_dir)
+    except PlcError as exc:
+        raise UserError(str(exc)) from None
     except RegisterMapError as exc:
         raise UserError(str(exc)) from None
     finally:

@@ -23,7 +23,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "scenario", nargs="?", help="scenario .toml file or shipped name (default: seed 003 hot end)"
     )
-    p.add_argument("--plc", metavar="HOST:PORT", help="use this PLC (OpenPLC or `thermost plc`) instead")
+    p.add_argument(
+        "--plc",
+        metavar="HOST:PORT",
+        action="append",
+        help="use this PLC (OpenPLC or `thermost plc`) instead; repeat it to run variant i on PLC i "
+        "at the same time",
+    )
     p.add_argument("--realtime", action="store_true", help="embedded soft-PLC on its real-time clock")
     p.add_argument(
         "--speed",

@@ -83,3 +83,50 @@ def test_run_against_an_external_stepped_plc(tmp_path):
     finally:
         os.kill(plc.pid, signal.SIGINT)
         plc.wait(timeout=10)
+
+
+def test_unreachable_plc_is_one_line(capsys):
+    import socket
+
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        port = sock.getsockname()[1]
+    assert main(["run", "seed003_sensor_fault", "--plc", f"127.0.0.1:{port}", "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "cannot connect" in err
+
+
+@pytest.mark.skipif(not list(APP_DIR.glob("*.st")), reason="no application in plc/app yet")
+def test_two_plcs_run_two_variants_side_by_side(tmp_path, capsys):
+    from plc.bundle import bundle_text
+    from plc.runtime.server import SoftPlcThread
+
+    text = (ROOT / "modbus_bridge" / "scenarios" / "seed003_sensor_fault.toml").read_text(encoding="utf-8")
+    text += '\n[[variant]]\nname = "left"\n\n[[variant]]\nname = "right"\n'
+    scenario = tmp_path / "two.toml"
+    scenario.write_text(text, encoding="utf-8")
+    program = bundle_text()
+    with SoftPlcThread(program, "127.0.0.1", 0, True) as a, SoftPlcThread(program, "127.0.0.1", 0, True) as b:
+        rc = main(
+            [
+                "run",
+                str(scenario),
+                "--plc",
+                f"127.0.0.1:{a.port}",
+                "--plc",
+                f"127.0.0.1:{b.port}",
+                "--out",
+                str(tmp_path / "out"),
+                "--quiet",
+            ]
+        )
+    assert rc == 0, capsys.readouterr().err
+    doc = json.loads((tmp_path / "out" / "metrics.json").read_text(encoding="utf-8"))
+    left, right = doc["variants"]
+    assert (left["name"], right["name"]) == ("left", "right")
+    assert left["phases"] == right["phases"]  # same scenario, same seed, two stepped PLCs: same result
+    assert (
+        main(["run", str(scenario), "--plc", "127.0.0.1:1", "--plc", "127.0.0.1:2", "--plc", "127.0.0.1:3"])
+        == 2
+    )
+    assert "3 PLCs for 2 variant(s)" in capsys.readouterr().err

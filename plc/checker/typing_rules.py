@@ -258,7 +258,10 @@ class ExpressionTyper:
         """Named and positional arguments against the callee's declared parameter types."""
         for position, (pname, value, is_output) in enumerate(self.arguments(call)):
             if pname is None:
-                if position >= len(callee.inputs):
+                # positional: only when the parameter list is plain VAR_INPUTs, so the order is certain
+                if position >= len(callee.inputs) or any(
+                    v.section in ("VAR_OUTPUT", "VAR_IN_OUT") for v in callee.vars.values()
+                ):
                     continue
                 pname = callee.inputs[position]
             param = callee.vars.get(pname)

@@ -1674,7 +1674,11 @@ class Compiler:
             lines.append("    def __init__(self):")
             for f, ft in t.fields.items():
                 init = t.field_inits.get(f)
-                lines.append(f"        self.v_{f} = {self.init_code(ft, init)}")
+                try:
+                    lines.append(f"        self.v_{f} = {self.init_code(ft, init)}")
+                except _Err as e:
+                    self.diags.append(e.diag)
+                    lines.append(f"        self.v_{f} = {self.default_code(ft)}")
             if not t.fields:
                 lines.append("        pass")
             lines.append("    def _copy(self):")

@@ -144,6 +144,11 @@ class ParsedSource:
         return out
 
 
+def _blank(c: str) -> str:
+    """Blank one character with as many spaces as it has UTF-8 bytes (byte columns stay put)."""
+    return " " * len(c.encode("utf-8"))
+
+
 def _rewrite(text: str, blank_pragmas: bool) -> tuple[str, dict[int, tuple[str, str]], dict[int, str]]:
     mask = _code_mask(text)
     chars = list(text)
@@ -180,7 +185,7 @@ def _rewrite(text: str, blank_pragmas: bool) -> tuple[str, dict[int, tuple[str, 
                 j += 1
             for q in range(k, min(j + 1, len(text))):
                 if chars[q] != "\n":
-                    chars[q] = " "
+                    chars[q] = _blank(chars[q])
             k = j + 1
             continue
         k += 1
@@ -197,7 +202,7 @@ def _rewrite(text: str, blank_pragmas: bool) -> tuple[str, dict[int, tuple[str, 
             type_inits[m.start()] = text[m.start(1) : end]
             for k in range(m.start(), end):
                 if chars[k] != "\n":
-                    chars[k] = " "
+                    chars[k] = _blank(chars[k])
     return "".join(chars), enum_literals, type_inits
 
 
@@ -218,6 +223,6 @@ def parse_source(text: str, filename: str = "<string>", blank_pragmas: bool = Fa
         text=text,
         src=src,
         tree=tree,
-        enum_literals=_byte_offsets(rewritten, enum_literals),
-        type_initializers=_byte_offsets(rewritten, type_inits),
+        enum_literals=_byte_offsets(text, enum_literals),
+        type_initializers=_byte_offsets(text, type_inits),
     )

@@ -170,3 +170,12 @@ def test_cure_mould_exotherm_and_mesh_coupling():
     y = run(one, [100.0, 0.0, 0.0, 0.0], 2000.0, dt=1.0)[-1]
     assert y[1] == pytest.approx(y[2])
     assert y[0] > y[1] > y[3] > 80.0  # neighbours warm first, the diagonal last
+
+
+def test_bench_measures_every_plant_model():
+    from modbus_bridge.bench import plant_costs
+    from modbus_bridge.plants import PLANT_MODELS
+
+    costs = plant_costs(20)
+    assert set(costs) == set(PLANT_MODELS)
+    assert all(us > 0.0 for us in costs.values())

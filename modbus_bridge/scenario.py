@@ -207,6 +207,28 @@ class _Table:
             self.fail(unknown[0], "unknown key")
 
 
+# plant fields that divide something: zero would be a plant without inertia or an infinite rate
+POSITIVE_PLANT_FIELDS = (
+    "time_constant_s",
+    "time_constant2_s",
+    "time_constant_scale",
+    "gain_scale",
+    "max_substep_s",
+    "heater_divisor",
+    "sensor_response_per_s",
+    "max_rise_c",
+    "loss_exponent",
+)
+
+
+def _must_be_positive(key: str) -> bool:
+    return (
+        key in POSITIVE_PLANT_FIELDS
+        or "heat_capacity" in key
+        or (key.endswith("_time_s") and key != "dead_time_s")
+    )
+
+
 def _plant_params(tab: _Table) -> tuple[str, dict[str, Any], Plant]:
     model = tab.get("model", str, choices=tuple(PLANT_MODELS))
     cls = PLANT_MODELS[model]
@@ -223,7 +245,7 @@ def _plant_params(tab: _Table) -> tuple[str, dict[str, Any], Plant]:
             tab.fail(key, f"must be a finite number, got {value!r}")
         if key.endswith(("_s", "_scale", "_j_k", "_w", "_w_k")) and key != "initial_c" and float(value) < 0.0:
             tab.fail(key, f"must be >= 0, got {value!r}")
-        if key in ("time_constant_scale", "gain_scale") and float(value) <= 0.0:
+        if _must_be_positive(key) and float(value) <= 0.0:
             tab.fail(key, f"must be > 0, got {value!r}")
         params[key] = float(value)
         tab.used.add(key)

@@ -33,6 +33,8 @@ class Fopdt(Plant):
     def __post_init__(self) -> None:
         if self.time_constant_s <= 0.0 or self.dead_time_s < 0.0:
             raise ValueError("time constant must be > 0 and dead time >= 0")
+        if self.u_min_pct >= self.u_max_pct:
+            raise ValueError(f"actuator range u_min_pct {self.u_min_pct} >= u_max_pct {self.u_max_pct}")
         self.reset()
 
     @property
@@ -84,6 +86,8 @@ class Sopdt(Plant):
     def __post_init__(self) -> None:
         if min(self.time_constant_s, self.time_constant2_s) <= 0.0 or self.dead_time_s < 0.0:
             raise ValueError("time constants must be > 0 and dead time >= 0")
+        if self.u_min_pct >= self.u_max_pct:
+            raise ValueError(f"actuator range u_min_pct {self.u_min_pct} >= u_max_pct {self.u_max_pct}")
         self.reset()
 
     def reset(self) -> None:

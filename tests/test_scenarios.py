@@ -61,7 +61,7 @@ BAD_CASES = [
     ("setpoint_c = 70.0", 'setpoint_c = "hot"', "zone[1].phase[2].setpoint_c", "must be float"),
     ("seed = 7", "seed = -1", "seed", ">= 0"),
     ("dead_time_s = 1.0", "dead_time_s = 1.0\ntime_constant_scale = 0.0", "plant.time_constant_scale", "> 0"),
-    ("dead_time_s = 1.0", "dead_time_s = 1.0\nu_min_pct = 50.0\nu_max_pct = 10.0", "plant", "impossible plant"),
+    ("dead_time_s = 1.0", "dead_time_s = 1.0\nu_min_pct = 5.0\nu_max_pct = 1.0", "plant", "impossible"),
 ]
 
 

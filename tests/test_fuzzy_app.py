@@ -42,7 +42,7 @@ def plc() -> ScanDriver:
         from plc.st.compiler import load_application
     except ImportError as exc:
         pytest.skip(f"soft-PLC compiler not available: {exc}")
-    lib = [s for s in library_sources() if "/fuzzy/" not in s[0]] + fuzzy_sources()
+    lib = library_sources() + fuzzy_sources()
     sources = lib + [
         ("plc/app/Config0.st", (APP_DIR / "Config0.st").read_text()),
         ("P_ThermoST.st", app_text()),

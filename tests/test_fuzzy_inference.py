@@ -10,7 +10,7 @@ import warnings
 import numpy as np
 import pytest
 
-from tests.st_helpers import REPO_ROOT, ScanDriver, build_program, load_test_app
+from tests.st_helpers import REPO_ROOT, ScanDriver, build_program, library_sources, load_test_app
 from tests.test_fuzzy_oracle import FuzzyConfig, infer, rule_strengths
 
 TOLERANCE = 1e-4  # of the output range
@@ -20,10 +20,11 @@ PRESET_CODE = {"textbook": 0, "seed000": 1, "seed003": 2}
 
 
 def fuzzy_sources() -> list[tuple[str, str]]:
-    return [
-        (str(p.relative_to(REPO_ROOT)), p.read_text())
-        for p in sorted((REPO_ROOT / "st_lib/fuzzy").glob("*.st"))
-    ]
+    """st_lib/fuzzy/*.st, unless tests.st_helpers.library_sources() already includes them."""
+    present = {name for name, _ in library_sources()}
+    files = sorted((REPO_ROOT / "st_lib/fuzzy").glob("*.st"))
+    pairs = [(str(p.relative_to(REPO_ROOT)), p.read_text()) for p in files]
+    return [pair for pair in pairs if pair[0] not in present]
 
 
 DECLS = """    sFz : ST_FuzzyParameter;

@@ -16,7 +16,7 @@ import pytest
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 ST_LIB = REPO_ROOT / "st_lib"
-EXCLUDED_DIRS = ("shim/twincat", "fuzzy")
+EXCLUDED_DIRS = ("shim/twincat",)
 TEST_INSTANCE = "inst0"
 
 

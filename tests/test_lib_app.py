@@ -57,7 +57,7 @@ def test_located_variables_two_zones(plc: ScanDriver) -> None:
                      "fKpZone", "fKsZone", "fTuZone", "fTgZone", "nPvRawZone", "bPwmHeatZone", "bUseRawZone"):
             assert f"{role}{zone}".lower() in names
     reserved = [v for v in plc.app.located if v.area == "M" and v.size == "D" and 200 <= v.index <= 299]
-    assert reserved == []  # the fuzzy adapter's block stays free
+    assert reserved and all(v.name.lower().startswith(("ffuzzy", "nfuzzy")) for v in reserved)
 
 
 def test_zone1_controls_fopdt_to_setpoint(plc: ScanDriver) -> None:

@@ -7,8 +7,24 @@ The .st file is the source of truth for the register map (modbus_bridge.regmap p
 
 from __future__ import annotations
 
+import importlib.util
+import sys
 from dataclasses import dataclass
 from pathlib import Path
+
+
+def _sibling(name: str):
+    """Load a generator module next to this file (the script runs without the package on sys.path)."""
+    if name in sys.modules:
+        return sys.modules[name]
+    spec = importlib.util.spec_from_file_location(name, Path(__file__).with_name(f"{name}.py"))
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+gen_fuzzy_block = _sibling("gen_fuzzy_block")
 
 OUT = Path(__file__).with_name("P_ThermoST.st")
 MD_ZONE_STRIDE = 100
@@ -207,14 +223,14 @@ def zone_decls(z: Zone) -> tuple[list[str], list[str]]:
 
 
 def fuzzy_decls(z: Zone) -> tuple[list[str], list[str]]:
-    """Hook for the fuzzy gain adapter (helper 'fuzzy'): (located declarations in %MD200..%MD299 /
-    %QX4.0..%QX4.7, internal declarations) of zone z. Empty until the adapter is wired in."""
-    return [], []
+    """The fuzzy gain adapter's (located declarations in %MD200..%MD299 / %QX4.0..%QX4.7, internal
+    declarations) of zone z; see gen_fuzzy_block.py and docs/fuzzy.md."""
+    return gen_fuzzy_block.fuzzy_decls(z)
 
 
 def fuzzy_body(z: Zone) -> list[str]:
-    """Hook for the fuzzy gain adapter: ST lines run before zone z's controller call."""
-    return []
+    """The fuzzy gain adapter's ST lines, run before zone z's controller call."""
+    return gen_fuzzy_block.fuzzy_body(z)
 
 
 def zone_init(z: Zone) -> list[str]:

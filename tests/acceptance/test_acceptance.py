@@ -63,9 +63,12 @@ def test_seed003_self_tuned_fuzzy_pid_matches_the_paper(harness):
     by_phase = {m.phase: m for m in metrics}
     assert by_phase["tune"].outcome == "ok", by_phase["tune"].outcome
     step, load = by_phase["step"].values, by_phase["load"].values
-    assert step["overshoot_pct"] <= PAPER_OVERSHOOT_PCT, step
-    assert step["settling_time_2pct_s"] <= PAPER_SETTLING_S, step
-    assert load["recovery_time_2pct_s"] <= PAPER_RECOVERY_S, load
+    got = (step["overshoot_pct"], step["settling_time_2pct_s"], load["recovery_time_2pct_s"])
+    figures = (f"overshoot {got[0]:.2f} % (paper {PAPER_OVERSHOOT_PCT}), 2 % settling {got[1]:.1f} s (paper "
+               f"{PAPER_SETTLING_S}), load recovery {got[2]:.1f} s (paper {PAPER_RECOVERY_S})")
+    assert got[0] <= PAPER_OVERSHOOT_PCT, figures
+    assert got[1] <= PAPER_SETTLING_S, figures
+    assert got[2] <= PAPER_RECOVERY_S, figures
 
 
 def first_time(t, mask):

@@ -394,3 +394,49 @@ def test_closed_loop_gain_changes_are_bumpless(loops: dict[str, LoopLog]) -> Non
     dkp = np.abs(np.diff(gains[:, 0])) * np.abs(np.array(log.e[1:]))
     assert dkp.max() <= 0.1 + 1e-3
     print(f"largest output step caused by a gain change: {steps.max():.4f} % (|dKp*e| max {dkp.max():.4f} %)")
+
+
+COOL_BASE = {"fKpCool": 4.0, "fTnCool": 80.0, "fTvCool": 2.0, "fTdCool": 0.5}
+
+
+def cooling_driver(adapt_cooling: bool = True) -> ScanDriver:
+    def setup(drv: ScanDriver) -> None:
+        for name, value in COOL_BASE.items():
+            drv.set(f"sCtrl.{name}", value)
+        drv.set("sFz.bAdaptCoolingSet", adapt_cooling)
+
+    drv = new_driver(setup=setup)
+    drv.set("bEnable", True)
+    drv.set("fX", 59.6)
+    for k in range(60):
+        drv.set("fX", 59.6 - 0.002 * k)  # a slow drift, so ec (and the Kd ratio) is not zero
+        drv.scan()
+    return drv
+
+
+def test_cooling_set_follows_the_same_ratios() -> None:
+    drv = cooling_driver()
+    rp, ri, rd = (drv.get(f"fbAd.f{g}Ratio") for g in ("Kp", "Ki", "Kd"))
+    assert abs(rp - 1.0) > 0.05 and abs(ri - 1.0) > 0.05
+    assert drv.get("sCtrl.fKpCool") == pytest.approx(4.0 * rp, rel=1e-5)
+    assert drv.get("sCtrl.fTnCool") == pytest.approx(80.0 * rp / ri, rel=1e-5)
+    assert drv.get("sCtrl.fTvCool") == pytest.approx(2.0 * rd / rp, rel=1e-5)
+    assert drv.get("sCtrl.fTdCool") == pytest.approx(0.5 * rd / rp, rel=1e-5)
+    # bad input: both sets back to their base
+    drv.set("fX", math.nan)
+    drv.scan()
+    assert drv.get("fbAd.bError")
+    assert_on_base(drv)
+    for name, value in COOL_BASE.items():
+        assert drv.get(f"sCtrl.{name}") == pytest.approx(value, rel=1e-6)
+
+
+def test_cooling_set_untouched_when_not_adapted() -> None:
+    drv = cooling_driver(adapt_cooling=False)
+    assert abs(drv.get("fbAd.fKpRatio") - 1.0) > 0.05
+    for name, value in COOL_BASE.items():
+        assert drv.get(f"sCtrl.{name}") == pytest.approx(value, rel=1e-6)
+    # a tuner writing a new cooling set is kept (and becomes the new base)
+    drv.set("sCtrl.fKpCool", 6.0)
+    drv.scan(3)
+    assert drv.get("sCtrl.fKpCool") == pytest.approx(6.0)

@@ -6,16 +6,8 @@ Handlers are imported lazily so `thermost --help` stays fast.
 from __future__ import annotations
 
 import argparse
-import importlib
 
-
-def _lazy(target: str):
-    module_name, func_name = target.split(":")
-
-    def handler(args: argparse.Namespace) -> int:
-        return getattr(importlib.import_module(module_name), func_name)(args)
-
-    return handler
+from plc.cli import lazy_handler as _lazy
 
 
 def register(sub: argparse._SubParsersAction) -> None:

@@ -13,6 +13,16 @@ import sys
 COMMAND_MODULES = ("plc.commands", "modbus_bridge.commands", "hmi.commands")
 
 
+def lazy_handler(target: str):
+    """Handler for "module:function", imported only when the sub-command runs."""
+    module_name, func_name = target.split(":")
+
+    def handler(args: argparse.Namespace) -> int:
+        return getattr(importlib.import_module(module_name), func_name)(args)
+
+    return handler
+
+
 class UserError(Exception):
     """An error caused by the user's input: printed as one line, exit code 2."""
 

@@ -34,7 +34,9 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="thermost", description="ThermoST: ST temperature control, soft-PLC and Modbus harness")
+    parser = _Parser(
+        prog="thermost", description="ThermoST: ST temperature control, soft-PLC and Modbus harness"
+    )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     for name in COMMAND_MODULES:
         try:

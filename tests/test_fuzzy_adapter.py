@@ -440,3 +440,19 @@ def test_cooling_set_untouched_when_not_adapted() -> None:
     drv.set("sCtrl.fKpCool", 6.0)
     drv.scan(3)
     assert drv.get("sCtrl.fKpCool") == pytest.approx(6.0)
+
+
+def test_error_sign_convention_flips_the_fuzzy_inputs() -> None:
+    results = {}
+    for flip in (False, True):
+        drv = new_driver()
+        drv.set("bEnable", True)
+        drv.set("sFz.bErrorXMinusW", flip)
+        drv.scan()
+        load(drv)
+        drv.set("fX", 59.7)
+        drv.scan(3)
+        results[flip] = (drv.get("fbAd.fE"), drv.get("fbAd.fEq"), drv.get("fbAd.fDeltaKp"))
+    assert results[True][0] == results[False][0]  # e itself is always W - X
+    assert results[True][1] == pytest.approx(-results[False][1])
+    assert results[True][2] != results[False][2]

@@ -181,11 +181,32 @@ def bundle_text(root: Path = ROOT) -> str:
     return render(bundle_declarations(root))
 
 
+_TASK_INTERVAL = re.compile(r"(INTERVAL\s*:=\s*T#)(\d+)(ms)", re.IGNORECASE)
+
+
+def with_speed(text: str, speed: int) -> str:
+    """Shorten every TASK INTERVAL by `speed` (the controllers keep their configured cycle time, so the
+    plant behind a real-time harness runs `speed` times faster than the wall clock)."""
+    if speed < 1:
+        raise UserError(f"--speed must be a whole number >= 1, not {speed}")
+
+    def shorten(m: re.Match) -> str:
+        ms = int(m.group(2))
+        if ms % speed:
+            raise UserError(f"--speed {speed}: TASK interval {ms} ms is not a multiple of it")
+        return f"{m.group(1)}{ms // speed}{m.group(3)}"
+
+    out, n = _TASK_INTERVAL.subn(shorten, text)
+    if speed != 1 and n == 0:
+        raise UserError("--speed: no TASK INTERVAL written in milliseconds (T#...ms) to shorten")
+    return out
+
+
 def main_bundle(args: argparse.Namespace) -> int:
     declarations = bundle_declarations()
     if not declarations:
         raise UserError(f"nothing to bundle: no .st files under {LIBRARY_DIR}/ or {APP_DIR}/")
-    text = render(declarations)
+    text = with_speed(render(declarations), int(getattr(args, "speed", 1) or 1))
     output = Path(args.output)
     output.parent.mkdir(parents=True, exist_ok=True)
     output.write_text(text, encoding="utf-8")

@@ -25,6 +25,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser("bundle", help="write the single .st file to upload to OpenPLC")
     p.add_argument("-o", "--output", required=True, metavar="FILE")
+    p.add_argument("--speed", type=int, default=1, metavar="N",
+                   help="divide the TASK interval by N (controllers keep their cycle time: the plant of a "
+                        "real-time harness runs N x faster, e.g. `thermost run --plc H:P --speed N`)")
     p.set_defaults(handler=_lazy("plc.bundle:main_bundle"))
 
     p = sub.add_parser("bench", help="print soft-PLC, adapter and harness benchmark figures")

@@ -123,3 +123,17 @@ def test_repository_bundle_and_cli(tmp_path, capsys):
     from plc.st.compiler import typecheck
 
     assert [str(d) for d in typecheck([("<bundle>", text)])] == []
+
+
+def test_speed_shortens_the_task_interval_only():
+    import pytest
+
+    from plc.bundle import bundle_text, with_speed
+    from plc.cli import UserError
+
+    text = bundle_text()
+    fast = with_speed(text, 10)
+    assert "INTERVAL := T#10ms" in fast and "INTERVAL := T#100ms" in text
+    assert fast.replace("T#10ms", "T#100ms") == text
+    with pytest.raises(UserError):
+        with_speed(text, 3)  # 100 ms is not a multiple of 3

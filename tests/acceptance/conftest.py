@@ -18,6 +18,7 @@ from modbus_bridge.runner import HarnessSetup, run_variants
 from modbus_bridge.scenario import Scenario
 
 PLC_ENV = "THERMOST_PLC"
+SPEED_ENV = "THERMOST_PLC_SPEED"
 
 
 def pytest_collection_modifyitems(items):
@@ -45,4 +46,16 @@ def harness() -> HarnessSetup:
 
 def run_scenario(setup: HarnessSetup, scenario: Scenario):
     """Run every variant of the scenario on the configured PLC; returns [(RunResult, [PhaseMetrics])]."""
-    return asyncio.run(run_variants(scenario, setup, plc=os.environ.get(PLC_ENV)))
+    return asyncio.run(run_variants(scenario, setup, plc=os.environ.get(PLC_ENV), speed=plc_speed()))
+
+
+def plc_speed() -> float:
+    """THERMOST_PLC_SPEED=N when the real PLC runs a bundle made with `thermost bundle --speed N`."""
+    raw = os.environ.get(SPEED_ENV, "1")
+    try:
+        speed = float(raw)
+    except ValueError:
+        raise pytest.UsageError(f"{SPEED_ENV}={raw!r} is not a number") from None
+    if speed <= 0:
+        raise pytest.UsageError(f"{SPEED_ENV} must be > 0")
+    return speed

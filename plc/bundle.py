@@ -1,6 +1,6 @@
 """`thermost bundle -o FILE.st`: the single file a user uploads to OpenPLC v3.
 
-Sources: every `st_lib/**/*.st` except the shims of other targets (only `st_lib/shim/matiec/`
+Sources: every `st_lib/**/*.st` except the shims of other targets (only `st_lib/shim/openplc/`
 is kept), plus `plc/app/*.st`. Each top-level declaration (TYPE block, FUNCTION,
 FUNCTION_BLOCK, PROGRAM, CONFIGURATION) is cut out with the comments in front of it, and
 the declarations are written in dependency order: TYPEs, FUNCTIONs, FUNCTION_BLOCKs,
@@ -23,7 +23,7 @@ from plc.cli import UserError
 ROOT = Path(__file__).resolve().parents[1]
 LIBRARY_DIR = "st_lib"
 SHIM_DIR = "shim"
-OPENPLC_SHIM = "matiec"
+OPENPLC_SHIM = "openplc"
 APP_DIR = Path("plc") / "app"
 
 KIND_RANK = {"TYPE": 0, "FUNCTION": 1, "FUNCTION_BLOCK": 2, "PROGRAM": 3, "CONFIGURATION": 4}

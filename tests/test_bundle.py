@@ -33,7 +33,7 @@ FILES = {
                             "END_FUNCTION_BLOCK\n",
     "st_lib/lib/FB_Bbb.st": "FUNCTION_BLOCK FB_Bbb\n  VAR_INPUT fIn : REAL; END_VAR\n"
                             "  VAR_OUTPUT fOut : REAL; END_VAR\n  fOut := fIn;\nEND_FUNCTION_BLOCK\n",
-    "st_lib/shim/matiec/FC_Shim.st": "FUNCTION FC_Shim : REAL\n  VAR_INPUT t : TIME; END_VAR\n"
+    "st_lib/shim/openplc/FC_Shim.st": "FUNCTION FC_Shim : REAL\n  VAR_INPUT t : TIME; END_VAR\n"
                                      "  FC_Shim := TIME_TO_REAL(t);\nEND_FUNCTION\n",
     "st_lib/shim/twincat/FC_Shim.st": "FUNCTION FC_Shim : REAL\n  VAR_INPUT t : TIME; END_VAR\n"
                                       "  FC_Shim := TIME_TO_REAL(t) / 1000.0;\nEND_FUNCTION\n",
@@ -62,7 +62,7 @@ def test_dependency_order_and_kind_groups(tmp_path):
 def test_only_the_matiec_shim_is_bundled(tmp_path):
     make_tree(tmp_path, FILES)
     sources = [p.relative_to(tmp_path).as_posix() for p in bundle_sources(tmp_path)]
-    assert "st_lib/shim/matiec/FC_Shim.st" in sources
+    assert "st_lib/shim/openplc/FC_Shim.st" in sources
     assert not any("twincat" in s for s in sources)
     assert "/ 1000.0" not in bundle_text(tmp_path)
 

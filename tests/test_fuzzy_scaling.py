@@ -36,8 +36,9 @@ def run(drv: ScanDriver, **fields: float) -> bool:
 def test_fopdt_identification(drv: ScanDriver) -> None:
     # K = 0.66 degC/%, T = 149 s, L = 15 s, Kp0 = 14.3 %/degC, output 0..100 %, U = 3
     assert run(drv, fKs=0.66, fTg=149.0, fTu=15.0, fKp=14.3, fYMin=0.0, fYMax=100.0)
-    e_max = 100.0 / 14.3
-    ec_max = 0.66 * 100.0 / 149.0
+    headroom = 100.0 / 2.0  # half the output span: the move available from a mid-range operating point
+    e_max = headroom / 14.3
+    ec_max = 0.66 * headroom / 149.0
     assert drv.get("sFz.fKe") == pytest.approx(3.0 / e_max, rel=1e-5)
     assert drv.get("sFz.fKec") == pytest.approx(3.0 / ec_max, rel=1e-5)
     assert drv.get("sFz.fEcFilterTime") == pytest.approx(0.25 * 15.0, rel=1e-6)
@@ -57,8 +58,9 @@ def test_slope_only_identification_and_cooling_span(drv: ScanDriver) -> None:
         fYMax=100.0,
         fCtrlCycleTime=1.0,
     )
-    assert drv.get("sFz.fKe") == pytest.approx(3.0 * 5.0 / 200.0, rel=1e-5)
-    assert drv.get("sFz.fKec") == pytest.approx(3.0 / (1.2 * 200.0 / 60.0), rel=1e-5)
+    headroom = 200.0 / 2.0  # half of the -100..100 % span
+    assert drv.get("sFz.fKe") == pytest.approx(3.0 * 5.0 / headroom, rel=1e-5)
+    assert drv.get("sFz.fKec") == pytest.approx(3.0 / (1.2 * headroom / 60.0), rel=1e-5)
     assert drv.get("sFz.fEcFilterTime") == pytest.approx(2.0, rel=1e-6)  # 2 control cycles > 0.25 * 4 s
 
 

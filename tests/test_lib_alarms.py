@@ -103,6 +103,25 @@ def test_thermal_runaway_at_temperature(uut: ScanDriver) -> None:
     assert not ack(uut, 50.0) & 0x4000
 
 
+def test_runaway_not_flagged_while_x_trails_a_setpoint_ramped_from_outside(uut: ScanDriver) -> None:
+    uut.set("sPar.fRunawayHysteresis", 4.0)
+    uut.set("sPar.fRunawayPeriod", 10.0)
+    uut.set("sPar.fTempAbsHigh", 300.0)
+    scan(uut, 50.0, n=5)  # at temperature: armed
+    w, x = 50.0, 50.0
+    for _ in range(round(60 / TS)):  # W ramped by a client at 0.1 degC/s, X follows 6 degC behind
+        w += 0.1 * TS
+        x = w - 6.0
+        uut.set("fbUut.fW1", w)
+        assert not scan(uut, x) & 0x4000
+    for _ in range(round(15 / TS)):  # ramp over, X stuck below the reached W: runaway after the period
+        alarm = scan(uut, x)
+    assert not alarm & 0x4000, "X never reached the new W - hysteresis: the check is not armed yet"
+    alarm = scan(uut, w - 1.0, n=3)  # reaches W: armed again
+    assert not alarm & 0x4000
+    assert scan(uut, w - 6.0, n=round(11 / TS)) & 0x4000
+
+
 def test_heat_up_watch(uut: ScanDriver) -> None:
     uut.set("sPar.fWatchPeriod", 20.0)
     uut.set("sPar.fWatchIncrease", 2.0)

@@ -60,8 +60,8 @@ BODY = """  IF NOT bInit THEN
     bInit := TRUE;
   END_IF;
   IF bSetRule THEN
-    bSetRuleOk := FC_FuzzySetRule(nOutput := nRuleOut, nE := nRuleE, nEc := nRuleEc, nValue := nRuleValue,
-                                  sRules := sFz.sRules);
+    bSetRuleOk := FC_FuzzySetRule(nOutput := nRuleOut, nSetE := nRuleE, nSetEc := nRuleEc,
+                                  nValue := nRuleValue, sRules := sFz.sRules);
     bSetRule := FALSE;
   END_IF;
   fbAd(bEnable := bEnable, bLoad := bLoad, fW := fW, fX := fX, sCtrlParam := sCtrl, sFuzzyParam := sFz);

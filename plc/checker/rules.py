@@ -32,6 +32,7 @@ from plc.checker.vocabulary import (
     TWINCAT_OPERATORS,
     UNSUPPORTED_TYPES,
     is_reserved,
+    is_standard_function,
     naming_problem,
 )
 from plc.st.diagnostics import Diagnostic
@@ -568,7 +569,7 @@ class FileChecker:
             elif node.type in ("enumerator", "structure_field"):
                 name = node.child_by_field_name("name")
                 if name is not None:
-                    declared.append((name, "member"))
+                    declared.append((name, node.type))
             elif node.type == "variable_declaration":
                 declared.extend((n, "variable") for n in node.children_by_field_name("names"))
         seen: set[int] = set()
@@ -603,5 +604,8 @@ class FileChecker:
     @staticmethod
     def name_rule(name: str, kind: str, report) -> None:
         problem = naming_problem(name) or is_reserved(name)
+        if problem is None and kind in ("variable", "enumerator") and is_standard_function(name):
+            # iec2c refuses these as variables and enum values; STRUCT members and POU names pass
+            problem = f"'{name}' is a standard function of MatIEC's library and cannot name a {kind}"
         if problem:
             report(problem)

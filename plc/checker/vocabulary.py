@@ -2,7 +2,8 @@
 
 Sources: IEC 61131-3 (2nd ed.) keyword table, MatIEC's lexer behaviour recorded in
 ../shared/reference/matiec-dialect.md (rows ident_st_keyword, ident_keyword_tod, ident_ref_as_name,
-enum_keyword_member) and the conformance README (standard FB names cannot name variables).
+enum_keyword_member, ident_std_function) and the conformance README (standard FB names cannot name
+variables).
 All sets hold upper-case names; ST identifiers are case-insensitive.
 """
 
@@ -274,6 +275,53 @@ FIXED_RESULT_FUNCTIONS = {
 GENERIC_CONVERSIONS = frozenset({f"TO_{t}" for t in ELEMENTARY_TYPES | {"WSTRING", "LTIME"}})
 # TwinCAT address / size operators (row adr_sizeof, pointer_to_twincat).
 TWINCAT_OPERATORS = frozenset({"ADR", "ADRINST", "SIZEOF", "BITADR", "__NEW", "__DELETE", "__QUERYINTERFACE"})
+
+# Functions of MatIEC's standard library (lib/ieclib.txt, IEC 61131-3 2nd ed. tables 22-36): once the
+# library is loaded their names are function-name tokens, so iec2c refuses them as variable names
+# (checked with iec2c: a variable nE, eq, max, len, trunc or int_to_real fails with "invalid located
+# variable declaration"; struct members named so are accepted). Besides the generic names, MatIEC
+# declares typed variants <NAME>_<TYPE> (ADD_REAL, MUX_INT_REAL, SUB_DT_TIME) and the conversions.
+STANDARD_FUNCTIONS = frozenset(
+    {
+        "ABS", "SQRT", "LN", "LOG", "EXP", "SIN", "COS", "TAN", "ASIN", "ACOS", "ATAN",
+        "ADD", "SUB", "MUL", "DIV", "MOD", "EXPT", "MOVE", "TRUNC", "DIVTIME", "MULTIME",
+        "SHL", "SHR", "ROL", "ROR", "AND", "OR", "XOR", "NOT",
+        "SEL", "MAX", "MIN", "LIMIT", "MUX",
+        "GT", "GE", "EQ", "LE", "LT", "NE",
+        "LEN", "LEFT", "RIGHT", "MID", "CONCAT", "INSERT", "DELETE", "REPLACE", "FIND",
+    }
+)  # fmt: skip
+# Generic functions MatIEC also declares once per argument type (ADD_REAL, EQ_TIME, MUX_INT_REAL).
+_TYPED_VARIANT_FUNCTIONS = STANDARD_FUNCTIONS - {
+    "EXPT", "TRUNC", "SHL", "SHR", "ROL", "ROR", "LEN", "LEFT", "RIGHT", "MID", "CONCAT", "INSERT", "DELETE",
+    "REPLACE", "FIND",
+}  # fmt: skip
+_TIME_FUNCTIONS = frozenset(
+    {"ADD_TOD_TIME", "ADD_DT_TIME", "SUB_DATE_DATE", "SUB_TOD_TIME", "SUB_TOD_TOD", "SUB_DT_TIME",
+     "SUB_DT_DT", "CONCAT_DATE_TOD"}
+)  # fmt: skip
+_SHORT_TYPE_NAMES = ELEMENTARY_TYPES - {"TIME_OF_DAY", "DATE_AND_TIME"}
+_BCD_BITS = ("BYTE", "WORD", "DWORD", "LWORD")
+_CONVERSION_ENDS = (
+    ELEMENTARY_TYPES | {f"{b}_BCD" for b in _BCD_BITS} | {f"BCD_{b}" for b in _BCD_BITS} | {"BCD"}
+)
+
+
+def is_standard_function(name: str) -> bool:
+    """Whether `name` (any case) is a function of MatIEC's standard library (a small superset of it)."""
+    upper = name.upper()
+    if upper in STANDARD_FUNCTIONS or upper in _TIME_FUNCTIONS:
+        return True
+    source, sep, target = upper.partition("_TO_")
+    if sep:
+        return source in _CONVERSION_ENDS and target in _CONVERSION_ENDS
+    base, _, suffix = upper.partition("_")
+    if base not in _TYPED_VARIANT_FUNCTIONS or not suffix:
+        return False
+    if base == "MUX":
+        selector, _, value_type = suffix.partition("_")
+        return selector in INT_TYPES and value_type in _SHORT_TYPE_NAMES
+    return suffix in _SHORT_TYPE_NAMES
 
 
 def is_reserved(name: str) -> str | None:

@@ -21,12 +21,17 @@ pytestmark = pytest.mark.realtools
 
 
 def _shipped_units() -> list[tuple[str, str]]:
-    from plc.bundle import bundle_text
+    from plc.bundle import bundle_text, order_declarations, render, split_declarations
 
     units = [("thermost_openplc.st", bundle_text())]
     lib_files = sorted(p for p in (ROOT / "st_lib").rglob("*.st") if "twincat" not in p.parts)
     if lib_files:
-        units.append(("thermost_library_only.st", "\n".join(p.read_text() for p in lib_files)))
+        # iec2c must meet a TYPE before a STRUCT member or variable uses it (-p covers POUs only),
+        # so the library is put in dependency order as the bundle is, not in path order.
+        declarations = []
+        for path in lib_files:
+            declarations += split_declarations(path.name, path.read_text(encoding="utf-8"))
+        units.append(("thermost_library_only.st", render(order_declarations(declarations))))
     return units
 
 

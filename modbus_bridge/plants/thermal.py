@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
@@ -41,7 +42,42 @@ class _DelayedInputs:
 
 
 @dataclass
-class NonlinearHotend(Plant):
+class LumpedPlant(Plant):
+    """Scaffolding of the RK4 heat-balance plants: start state, input dead time, ambient, integration.
+    A subclass sets `channels`, STATE_NODES (states that start at the initial temperature), EXTRA_STATES
+    (states that start at 0) and `delay_s()`, and writes only its heat balance in `step()`."""
+
+    ambient_c: float = 25.0
+    initial_c: float | None = None
+    time_constant_scale: float = 1.0
+    max_substep_s: float = 0.5
+
+    STATE_NODES: ClassVar[int] = 1
+    EXTRA_STATES: ClassVar[int] = 0
+
+    def __post_init__(self) -> None:
+        self.reset()
+
+    def delay_s(self) -> float:
+        return self.dead_time_s  # type: ignore[attr-defined]
+
+    def reset(self) -> None:
+        start = self.ambient_c if self.initial_c is None else self.initial_c
+        self._x = np.concatenate([np.full(self.STATE_NODES, float(start)), np.zeros(self.EXTRA_STATES)])
+        self._delay = _DelayedInputs(self.delay_s(), self.channels)
+
+    def delayed_inputs(self, u_pct: Sequence[float], dt: float, dist: PlantDisturbance) -> list[float]:
+        return self._delay.push(self.effective_inputs(u_pct, dist), dt)
+
+    def ambient(self, dist: PlantDisturbance) -> float:
+        return self.ambient_c + dist.ambient_offset_c
+
+    def integrate(self, f, dt: float) -> None:
+        self._x = rk4_step(f, self._x, dt, self.max_substep_s)
+
+
+@dataclass
+class NonlinearHotend(LumpedPlant):
     heater_w: float = 40.0
     heat_capacity_j_k: float = 16.7
     loss_coeff_w: float = 0.0  # k in k (dT)^E; 0 -> derived from max_rise_c
@@ -50,10 +86,6 @@ class NonlinearHotend(Plant):
     fan_w_k: float = 0.029  # extra loss at full fan (Marlin MPC: 0.097 - 0.068 W/K)
     filament_j_k_mm: float = 0.0056
     dead_time_s: float = 5.5
-    ambient_c: float = 25.0
-    initial_c: float | None = None
-    time_constant_scale: float = 1.0
-    max_substep_s: float = 0.5
     channels: int = field(default=1, init=False)
 
     def __post_init__(self) -> None:
@@ -61,14 +93,10 @@ class NonlinearHotend(Plant):
             self.loss_coeff_w = self.heater_w / self.max_rise_c**self.loss_exponent
         self.reset()
 
-    def reset(self) -> None:
-        self._x = np.array([self.ambient_c if self.initial_c is None else self.initial_c])
-        self._delay = _DelayedInputs(self.dead_time_s, 1)
-
     def step(self, u_pct: Sequence[float], dt: float, dist: PlantDisturbance) -> None:
-        (u,) = self._delay.push(self.effective_inputs(u_pct, dist), dt)
+        (u,) = self.delayed_inputs(u_pct, dt, dist)
         zd = dist.zones[0]
-        ta = self.ambient_c + dist.ambient_offset_c
+        ta = self.ambient(dist)
         cap = self.heat_capacity_j_k * self.time_constant_scale
         power = self.heater_w * u / 100.0
 
@@ -78,14 +106,14 @@ class NonlinearHotend(Plant):
             loss += (self.fan_w_k * zd.fan + self.filament_j_k_mm * zd.filament_mm_s) * dtemp
             return np.array([(power - loss) / cap])
 
-        self._x = rk4_step(f, self._x, dt, self.max_substep_s)
+        self.integrate(f, dt)
 
     def temperatures(self) -> list[float]:
         return [float(self._x[0])]
 
 
 @dataclass
-class MarlinHotend(Plant):
+class MarlinHotend(LumpedPlant):
     heater_w: float = 40.0
     block_heat_capacity_j_k: float = 16.7
     ambient_xfer_w_k: float = 0.068
@@ -93,24 +121,14 @@ class MarlinHotend(Plant):
     sensor_response_per_s: float = 0.22
     filament_j_k_mm: float = 0.0056
     dead_time_s: float = 0.0
-    ambient_c: float = 25.0
-    initial_c: float | None = None
-    time_constant_scale: float = 1.0
-    max_substep_s: float = 0.5
     channels: int = field(default=1, init=False)
 
-    def __post_init__(self) -> None:
-        self.reset()
-
-    def reset(self) -> None:
-        start = self.ambient_c if self.initial_c is None else self.initial_c
-        self._x = np.array([start, start])  # block, sensor
-        self._delay = _DelayedInputs(self.dead_time_s, 1)
+    STATE_NODES: ClassVar[int] = 2  # block, sensor
 
     def step(self, u_pct: Sequence[float], dt: float, dist: PlantDisturbance) -> None:
-        (u,) = self._delay.push(self.effective_inputs(u_pct, dist), dt)
+        (u,) = self.delayed_inputs(u_pct, dt, dist)
         zd = dist.zones[0]
-        ta = self.ambient_c + dist.ambient_offset_c
+        ta = self.ambient(dist)
         cap = self.block_heat_capacity_j_k * self.time_constant_scale
         power = self.heater_w * u / 100.0
         xfer = self.ambient_xfer_w_k + self.fan_extra_xfer_w_k * zd.fan
@@ -120,14 +138,14 @@ class MarlinHotend(Plant):
         def f(x: np.ndarray) -> np.ndarray:
             return np.array([(power - xfer * (x[0] - ta)) / cap, r * (x[0] - x[1])])
 
-        self._x = rk4_step(f, self._x, dt, self.max_substep_s)
+        self.integrate(f, dt)
 
     def temperatures(self) -> list[float]:
         return [float(self._x[1])]
 
 
 @dataclass
-class TclabTwin(Plant):
+class TclabTwin(LumpedPlant):
     """dH_i/dt = P Q_i/5720 + (Ta - H_i)/20 -/+ (H1 - H2)/100; dT_i/dt = (H_i - T_i)/140."""
 
     heater_factor: float = 200.0
@@ -136,23 +154,14 @@ class TclabTwin(Plant):
     coupling_time_s: float = 100.0
     sensor_time_s: float = 140.0
     ambient_c: float = 21.0
-    initial_c: float | None = None
-    time_constant_scale: float = 1.0
     dead_time_s: float = 0.0
-    max_substep_s: float = 0.5
     channels: int = field(default=2, init=False)
 
-    def __post_init__(self) -> None:
-        self.reset()
-
-    def reset(self) -> None:
-        start = self.ambient_c if self.initial_c is None else self.initial_c
-        self._x = np.full(4, start)  # H1, H2, T1, T2
-        self._delay = _DelayedInputs(self.dead_time_s, 2)
+    STATE_NODES: ClassVar[int] = 4  # H1, H2, T1, T2
 
     def step(self, u_pct: Sequence[float], dt: float, dist: PlantDisturbance) -> None:
-        q = self._delay.push(self.effective_inputs(u_pct, dist), dt)
-        ta = self.ambient_c + dist.ambient_offset_c
+        q = self.delayed_inputs(u_pct, dt, dist)
+        ta = self.ambient(dist)
         s = self.time_constant_scale
 
         heat = [self.heater_factor * qi / self.heater_divisor for qi in q]
@@ -169,14 +178,14 @@ class TclabTwin(Plant):
                 ]
             )
 
-        self._x = rk4_step(f, self._x, dt, self.max_substep_s)
+        self.integrate(f, dt)
 
     def temperatures(self) -> list[float]:
         return [float(self._x[2]), float(self._x[3])]
 
 
 @dataclass
-class FormingPlatform(Plant):
+class FormingPlatform(LumpedPlant):
     """Seed 000: liquid bath (heater + compressor) pumped through the platform; PT100 at the loop exit."""
 
     heater_w: float = 60.0
@@ -188,25 +197,19 @@ class FormingPlatform(Plant):
     platform_ambient_w_k: float = 0.3
     transport_delay_s: float = 8.0
     ambient_c: float = 20.0
-    initial_c: float | None = None
-    time_constant_scale: float = 1.0
-    max_substep_s: float = 0.5
     u_min_pct: float = -100.0
     u_max_pct: float = 100.0
     channels: int = field(default=1, init=False)
 
-    def __post_init__(self) -> None:
-        self.reset()
+    STATE_NODES: ClassVar[int] = 2  # bath, platform
 
-    def reset(self) -> None:
-        start = self.ambient_c if self.initial_c is None else self.initial_c
-        self._x = np.array([start, start])  # bath, platform
-        self._delay = _DelayedInputs(self.transport_delay_s, 1)
+    def delay_s(self) -> float:
+        return self.transport_delay_s
 
     def step(self, u_pct: Sequence[float], dt: float, dist: PlantDisturbance) -> None:
-        (u,) = self._delay.push(self.effective_inputs(u_pct, dist), dt)
+        (u,) = self.delayed_inputs(u_pct, dt, dist)
         power = self.heater_w * u / 100.0 if u >= 0.0 else self.cooler_w * u / 100.0
-        ta = self.ambient_c + dist.ambient_offset_c
+        ta = self.ambient(dist)
         s = self.time_constant_scale
 
         def f(x: np.ndarray) -> np.ndarray:
@@ -219,14 +222,14 @@ class FormingPlatform(Plant):
                 ]
             )
 
-        self._x = rk4_step(f, self._x, dt, self.max_substep_s)
+        self.integrate(f, dt)
 
     def temperatures(self) -> list[float]:
         return [float(self._x[1])]
 
 
 @dataclass
-class CureMould(Plant):
+class CureMould(LumpedPlant):
     """Seed 004: 2x2 heater nodes; node i: C dT_i/dt = P u_i - h (T_i - Ta) - g sum_nb (T_i - T_j) + q_cure_i,
     q_cure = H dalpha/dt, dalpha/dt = k_ref exp(-Ea/R (1/T - 1/T_ref)) (1 - alpha) when T >= T_act."""
 
@@ -241,21 +244,14 @@ class CureMould(Plant):
     cure_activation_energy_j_mol: float = 60_000.0
     dead_time_s: float = 2.0
     ambient_c: float = 80.0
-    initial_c: float | None = None
-    time_constant_scale: float = 1.0
     max_substep_s: float = 1.0
     channels: int = field(default=4, init=False)
 
     # 2x2 mesh, nodes numbered row-major: 0 1 / 2 3; each node touches two neighbours
     NEIGHBOURS = ((1, 2), (0, 3), (0, 3), (1, 2))
 
-    def __post_init__(self) -> None:
-        self.reset()
-
-    def reset(self) -> None:
-        start = self.ambient_c if self.initial_c is None else self.initial_c
-        self._x = np.concatenate([np.full(4, start), np.zeros(4)])  # temperatures, degree of cure
-        self._delay = _DelayedInputs(self.dead_time_s, 4)
+    STATE_NODES: ClassVar[int] = 4  # node temperatures
+    EXTRA_STATES: ClassVar[int] = 4  # degree of cure per node
 
     def cure_rate(self, temp_c: float, alpha: float) -> float:
         if temp_c < self.activation_c or alpha >= 1.0:
@@ -265,8 +261,8 @@ class CureMould(Plant):
         return self.cure_rate_ref_per_s * arrhenius * (1.0 - alpha)
 
     def step(self, u_pct: Sequence[float], dt: float, dist: PlantDisturbance) -> None:
-        u = self._delay.push(self.effective_inputs(u_pct, dist), dt)
-        ta = self.ambient_c + dist.ambient_offset_c
+        u = self.delayed_inputs(u_pct, dt, dist)
+        ta = self.ambient(dist)
         cap = self.node_heat_capacity_j_k * self.time_constant_scale
 
         def f(x: np.ndarray) -> np.ndarray:
@@ -281,7 +277,7 @@ class CureMould(Plant):
                 d[4 + i] = rate
             return d
 
-        self._x = rk4_step(f, self._x, dt, self.max_substep_s)
+        self.integrate(f, dt)
 
     def temperatures(self) -> list[float]:
         return [float(v) for v in self._x[:4]]

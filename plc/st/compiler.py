@@ -366,9 +366,6 @@ class Compiler:
         for block in pou.node.named_children:
             if block.type in SECTION_OF:
                 self.declare_vars(block, src, pou.vars, pou.order)
-        for v in pou.vars.values():
-            if v.section == "ext":
-                pass  # resolved against the configuration's VAR_GLOBAL at compile time
 
     # ------------------------------------------------------------------ emit helpers
     def new_tmp(self) -> str:
@@ -461,9 +458,7 @@ class Compiler:
             return Ex(repr(idx), et, "enum", idx)
         name = src.node_text(node).lower()
         pou = self.pou
-        if pou is not None and (
-            name in pou.vars or (self.mode != "config" and name in self.globals and name in pou.vars)
-        ):
+        if pou is not None and name in pou.vars:
             code, v = self.ref_var(name, node)
             return Ex(code, v.type, _c_of(v.type))
         if pou is not None and pou.kind == "function" and name.upper() == pou.name:
@@ -1435,7 +1430,6 @@ class Compiler:
     def for_statement(self, st: Node) -> None:
         kids = st.children
         var_node = kids[1]
-        named_after = [c for c in kids if c.is_named and c.type != "comment"]
         # children: FOR id := start TO end [BY step] DO stmts END_FOR
         to_i = next(i for i, c in enumerate(kids) if c.type == "TO")
         do_i = next(i for i, c in enumerate(kids) if c.type == "DO")
@@ -1444,7 +1438,6 @@ class Compiler:
         end_node = kids[to_i + 1]
         step_node = kids[by_i + 1] if by_i is not None else None
         stmts = [c for c in kids[do_i + 1 :] if c.is_named and c.type != "comment"]
-        del named_after
         lv = self.lvalue(var_node)
         if lv.t.kind != "int":
             raise self.err(self.src, var_node, "FOR variable must be an integer variable")
@@ -1703,18 +1696,10 @@ class Compiler:
         self.tmp = 0
         self.pre = []
         self.loop_depth = 0
-        stmts = [
-            c
-            for c in pou.node.named_children
-            if c.type not in SECTION_OF
-            and c.type not in ("identifier", "comment", "elementary_type")
-            and not c.type.endswith("_type")
-        ]
         if pou.kind == "function":
-            stmts = stmts[0:]
-            self.gen_function(pou, stmts)
+            self.gen_function(pou)
         else:
-            self.gen_class(pou, stmts)
+            self.gen_class(pou)
 
     def statement_nodes(self, pou: Pou) -> list[Node]:
         out = []
@@ -1725,7 +1710,7 @@ class Compiler:
                 out.append(c)
         return out
 
-    def gen_class(self, pou: Pou, _stmts) -> None:
+    def gen_class(self, pou: Pou) -> None:
         self.mode = "method"
         names = [n for n in pou.order if pou.vars[n].section != "ext"]
         slots = ", ".join(repr(f"v_{n}") for n in names)
@@ -1761,7 +1746,7 @@ class Compiler:
         self.indent = 0
         self.emit("")
 
-    def gen_function(self, pou: Pou, _stmts) -> None:
+    def gen_function(self, pou: Pou) -> None:
         self.mode = "function"
         params = pou.params()
         outputs = pou.outputs()
@@ -1916,9 +1901,6 @@ class Compiler:
             self.diags.extend(src.syntax_errors())
         if self.diags:
             return "", []
-        for src in self.sources:
-            if src.tree.root_node.named_children and False:
-                pass
         self.collect_globals_first()
         self.collect()
         self.check_externals()

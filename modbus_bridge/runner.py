@@ -79,23 +79,28 @@ async def run_variants(
     """One run per variant; with the embedded soft-PLC each variant gets a freshly loaded program."""
     bindings = setup.bindings(scenario)
     runs: list[tuple[RunResult, list[PhaseMetrics]]] = []
+
+    async def reset_and_run(client: PlcClient, variant, stepped: bool) -> RunResult:
+        # the application takes its parameter registers from the controller on its first scan:
+        # reset (and scan) before the scenario writes anything
+        await _reset_controllers(client, bindings, setup.codes, stepped)
+        return await close_loop(
+            scenario,
+            variant,
+            client,
+            bindings,
+            setup.codes,
+            realtime=not stepped,
+            speed=speed,
+            progress=progress,
+            max_plant_time_s=max_plant_time_s,
+        )
+
     for variant in scenario.variants:
         if plc is not None:
             host, port = parse_host_port(plc)
             async with PlcClient(host, port, setup.regmap, name="PLC") as client:
-                stepped = await client.stepped()
-                await _reset_controllers(client, bindings, setup.codes, stepped)
-                result = await close_loop(
-                    scenario,
-                    variant,
-                    client,
-                    bindings,
-                    setup.codes,
-                    realtime=not stepped,
-                    speed=speed,
-                    progress=progress,
-                    max_plant_time_s=max_plant_time_s,
-                )
+                result = await reset_and_run(client, variant, await client.stepped())
         else:
             from plc.runtime.server import SoftPlc
 
@@ -104,20 +109,7 @@ async def run_variants(
             async with SoftPlc(text, host="127.0.0.1", port=0, stepped=not realtime) as soft:
                 setup.startup_s += time.perf_counter() - t0
                 async with PlcClient("127.0.0.1", soft.port, setup.regmap, name="soft-PLC") as client:
-                    # the application takes its parameter registers from the controller on its first scan:
-                    # scan before the scenario writes anything (a real PLC has long been scanning)
-                    await _reset_controllers(client, bindings, setup.codes, stepped=not realtime)
-                    result = await close_loop(
-                        scenario,
-                        variant,
-                        client,
-                        bindings,
-                        setup.codes,
-                        realtime=realtime,
-                        speed=speed,
-                        progress=progress,
-                        max_plant_time_s=max_plant_time_s,
-                    )
+                    result = await reset_and_run(client, variant, stepped=not realtime)
         runs.append((result, run_metrics(result)))
     return runs
 

@@ -6,31 +6,14 @@ q_copy := ix_in; divisor = 0 -> integer division fault; index > 3 -> array index
 
 from __future__ import annotations
 
-import struct
 from dataclasses import dataclass, field
 from typing import Any
 
+from plc.st.app import LocatedVar
 from plc.st.errors import PlcRuntimeError
+from plc.st.rt import f32
 
 INTERVAL_NS = 10_000_000
-
-
-def f32(value: float) -> float:
-    return struct.unpack(">f", struct.pack(">f", value))[0]
-
-
-@dataclass
-class FakeLocated:
-    name: str
-    instance: str
-    location: str
-    area: str
-    size: str
-    index: int
-    bit: int | None
-    iec_type: str
-    get: Any
-    set: Any
 
 
 @dataclass
@@ -39,7 +22,7 @@ class FakeApplication:
     time_ns: int = 0
     fault: PlcRuntimeError | None = None
     values: dict[str, Any] = field(default_factory=dict)
-    located: list[FakeLocated] = field(default_factory=list)
+    located: list[LocatedVar] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         layout = [
@@ -62,7 +45,7 @@ class FakeApplication:
         ]
         for name, location, area, size, index, bit, iec_type, initial in layout:
             self.values[name] = initial
-            self.located.append(FakeLocated(
+            self.located.append(LocatedVar(
                 name, "inst0", location, area, size, index, bit, iec_type,
                 (lambda n=name: self.values[n]), (lambda v, n=name: self.values.__setitem__(n, v)),
             ))

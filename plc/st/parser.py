@@ -22,36 +22,10 @@ import tree_sitter
 import tree_sitter_iec61131_3_st
 
 from plc.st.diagnostics import Diagnostic
+from plc.st.types import ELEMENTARY
 
-LITERAL_PREFIXES = {
-    "SINT",
-    "INT",
-    "DINT",
-    "LINT",
-    "USINT",
-    "UINT",
-    "UDINT",
-    "ULINT",
-    "REAL",
-    "LREAL",
-    "BOOL",
-    "BYTE",
-    "WORD",
-    "DWORD",
-    "LWORD",
-    "T",
-    "TIME",
-    "LT",
-    "LTIME",
-    "D",
-    "DATE",
-    "TOD",
-    "TIME_OF_DAY",
-    "DT",
-    "DATE_AND_TIME",
-    "STRING",
-    "WSTRING",
-}
+# `X#...` is a typed literal for every elementary type name plus the short and TwinCAT-only prefixes
+LITERAL_PREFIXES = set(ELEMENTARY) | {"T", "D", "LT", "LTIME", "WSTRING"}
 
 _ENUM_LITERAL = re.compile(r"\b([A-Za-z_]\w*)#([A-Za-z_]\w*)")
 _TIME_LITERAL = re.compile(r"\b(?:T|TIME)#-?[0-9][0-9A-Za-z_.]*", re.IGNORECASE)

@@ -15,10 +15,8 @@ from .binding import ControllerCodes, ZoneBinding, resolve_zone
 from .client import PlcClient
 from .loop import ProgressFn, RunResult, close_loop
 from .regmap import RegisterMap, load_register_map
+from .reset import FactoryState, reset_to_known_state
 from .scenario import Scenario
-
-RESET_SCANS = 2
-EXTERNAL_RESET_WAIT_S = 0.5
 
 
 @dataclass
@@ -30,6 +28,7 @@ class HarnessSetup:
     program: str | None = None  # ST text for the embedded soft-PLC (None: the project bundle)
     startup_s: float = 0.0
     notes: list[str] = field(default_factory=list)
+    factory: FactoryState | None = None
 
     @staticmethod
     def default() -> HarnessSetup:
@@ -45,6 +44,12 @@ class HarnessSetup:
             self.program = bundle_text()
         return self.program
 
+    def factory_state(self) -> FactoryState:
+        """The application's register values after its first scans (a reference copy of the program)."""
+        if self.factory is None:
+            self.factory = FactoryState.of_program(self.program_text(), self.regmap)
+        return self.factory
+
 
 def parse_host_port(text: str) -> tuple[str, int]:
     host, sep, port = text.rpartition(":")
@@ -54,16 +59,15 @@ def parse_host_port(text: str) -> tuple[str, int]:
 
 
 async def _reset_controllers(
-    client: PlcClient, bindings: dict[int, ZoneBinding], codes: ControllerCodes, stepped: bool
+    client: PlcClient,
+    scenario: Scenario,
+    setup: HarnessSetup,
+    bindings: dict[int, ZoneBinding],
+    stepped: bool,
 ) -> None:
-    """Fresh controller state before a run on a PLC that may have run before (mode RESET, then IDLE)."""
-    if "RESET" not in codes.modes:
-        return
-    await client.write_tags({b["mode"]: codes.modes["RESET"] for b in bindings.values()})
-    if stepped:
-        await client.step(RESET_SCANS)
-    else:
-        await asyncio.sleep(EXTERNAL_RESET_WAIT_S)
+    """A known state before a run on a PLC that may have run before (reset.py)."""
+    factory = setup.factory_state()
+    await reset_to_known_state(client, scenario, bindings, setup.codes, factory, stepped=stepped)
 
 
 async def run_variants(
@@ -83,7 +87,7 @@ async def run_variants(
     async def reset_and_run(client: PlcClient, variant, stepped: bool) -> RunResult:
         # the application takes its parameter registers from the controller on its first scan:
         # reset (and scan) before the scenario writes anything
-        await _reset_controllers(client, bindings, setup.codes, stepped)
+        await _reset_controllers(client, scenario, setup, bindings, stepped)
         return await close_loop(
             scenario,
             variant,
@@ -181,6 +185,7 @@ def run_variants_parallel(
             run_variants(scenario, setup, progress=progress, max_plant_time_s=max_plant_time_s)
         )
     setup.program_text()  # bundle once, before forking
+    setup.factory_state()
     ctx = mp.get_context("fork")
     queue = ctx.Queue()
     kwargs = {"max_plant_time_s": max_plant_time_s, "plot_dir": plot_dir}
@@ -235,7 +240,7 @@ async def run_fleet(jobs: list[FleetJob], setup: HarnessSetup, *, speed: float =
         bindings = setup.bindings(job.scenario)
         async with PlcClient(host, port, setup.regmap, name=f"PLC {job.plc}") as client:
             stepped = await client.stepped()
-            await _reset_controllers(client, bindings, setup.codes, stepped)
+            await _reset_controllers(client, job.scenario, setup, bindings, stepped)
             return await close_loop(
                 job.scenario,
                 job.scenario.variants[job.variant_index],

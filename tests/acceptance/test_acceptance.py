@@ -82,13 +82,14 @@ def first_time(t, mask):
     return float(t[idx[0]]) if idx.size else None
 
 
-@pytest.mark.parametrize("fault", ["open", "short"])
-def test_sensor_fault_trips_the_alarm_and_switches_the_output_off(harness, fault):
+def sensor_fault_scenario(fault: str):
     sc = load_scenario(resolve_scenario("seed003_sensor_fault"))
     tune, settle, fault_phase = sc.zones[0].phases
     injected = dataclasses.replace(fault_phase.disturbances[0], value=fault)
-    sc = only_phases(sc, [tune, settle, dataclasses.replace(fault_phase, disturbances=[injected])])
-    ((result, _),) = run_scenario(harness, sc)
+    return only_phases(sc, [tune, settle, dataclasses.replace(fault_phase, disturbances=[injected])])
+
+
+def assert_sensor_fault_handled(result, fault: str) -> None:
     assert result.error is None, result.error
     tr = result.zones[0]
     assert tr.phases[0].outcome == "ok", tr.phases[0].outcome
@@ -101,6 +102,12 @@ def test_sensor_fault_trips_the_alarm_and_switches_the_output_off(harness, fault
     t_off = first_time(t, (t >= t_alarm) & (u == 0.0))
     assert t_off is not None and t_off - t_alarm <= REACTION_S
     assert np.all(u[t >= t_off] == 0.0), f"the heater came back on with the sensor still faulty ({fault})"
+
+
+@pytest.mark.parametrize("fault", ["open", "short"])
+def test_sensor_fault_trips_the_alarm_and_switches_the_output_off(harness, fault):
+    ((result, _),) = run_scenario(harness, sensor_fault_scenario(fault))
+    assert_sensor_fault_handled(result, fault)
 
 
 def test_failed_heater_trips_thermal_runaway(harness):

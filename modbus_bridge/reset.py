@@ -1,0 +1,153 @@
+"""A known state before every run on a PLC that may have run before (a long-running OpenPLC).
+
+The known state is the application's own factory state: the values its registers and coils hold after
+the first scans of a freshly loaded program. They are taken once from a reference copy of the program
+(compiled in this process, never the PLC under test) and written to the PLC over Modbus:
+
+1. every zone to mode RESET (output 0 at once) and its process value to the plant's start temperature,
+   so a faulty PV of the previous run cannot latch an alarm again;
+2. every client-writable register and coil back to its factory value (parameters, limits, tuned gains,
+   fuzzy registers; self-resetting command coils excepted);
+3. a few scans, then the alarms acknowledged and restored fuzzy registers applied (command coils);
+4. read back: mode and state RESET, alarm word 0, PV as written, every parameter as restored. A PLC that
+   does not get there is retried a few times, then the run is refused with one line naming what differs.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import math
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+from .binding import ControllerCodes, ZoneBinding
+from .client import PlcClient, PlcError
+from .regmap import RegisterMap
+from .scenario import Scenario
+
+RESET_SCANS = 2
+EXTERNAL_RESET_WAIT_S = 0.5
+ATTEMPTS = 3
+REL_TOLERANCE = 1e-6  # REAL read back through float32
+# coils a client sets TRUE for one scan (the PLC clears them): never restored, pulsed where named below
+COMMAND_COIL = re.compile(r"self-resetting|write TRUE", re.IGNORECASE)
+PULSED_COILS = (re.compile(r"bAckZone\d+", re.IGNORECASE), re.compile(r"bFuzzyLoadZone\d+", re.IGNORECASE))
+# parameters checked on read back when the register map carries no owner metadata
+VERIFIED_ROLES = ("kp", "tn", "tv", "td", "kp_cool", "tn_cool", "tv_cool", "setpoint", "manual", "fuzzy")
+
+
+@dataclass
+class FactoryState:
+    """Client-writable tags of the application with the values a fresh program shows."""
+
+    values: dict[str, float | int | bool] = field(default_factory=dict)
+
+    @staticmethod
+    def of_program(text: str, regmap: RegisterMap, scans: int = RESET_SCANS) -> FactoryState:
+        from plc.runtime.server import load_program
+
+        app = load_program(text, "<reference copy>")
+        for _ in range(scans):
+            app.scan()
+        state = FactoryState()
+        for var in app.located:
+            tag = regmap.tags.get(var.name)
+            if tag is None or not tag.writable:
+                continue
+            value = var.get()
+            if tag.is_bit:
+                state.values[tag.name] = bool(value)
+            elif isinstance(value, float) and math.isfinite(value):
+                state.values[tag.name] = value
+            elif isinstance(value, int | bool):
+                state.values[tag.name] = int(value)
+        return state
+
+
+def _owner(regmap: RegisterMap, name: str) -> str | None:
+    meta = getattr(regmap[name], "meta", None)
+    return getattr(meta, "owner", None) if meta is not None else None
+
+
+def is_command(regmap: RegisterMap, name: str) -> bool:
+    owner = _owner(regmap, name)
+    if owner is not None:
+        return owner == "command"
+    tag = regmap[name]
+    return tag.is_bit and bool(COMMAND_COIL.search(tag.comment))
+
+
+def verified_tags(regmap: RegisterMap, factory: FactoryState, scenario: Scenario,
+                  bindings: Mapping[int, ZoneBinding]) -> list[str]:
+    """Parameters checked after the reset: every client-owned tag when the map says who owns what, else
+    the controller gains, setpoint, manual value, fuzzy switch and every tag a scenario phase writes."""
+    owners = {name: _owner(regmap, name) for name in factory.values}
+    if any(o is not None for o in owners.values()):
+        return [n for n, o in owners.items() if o == "client"]
+    names = {b[r] for b in bindings.values() for r in VERIFIED_ROLES if b.has(r)}
+    names |= {tag for z in scenario.zones for ph in z.phases for tag in ph.writes}
+    return sorted(n for n in names if n in factory.values)
+
+
+def _same(a: float | int | bool, b: float | int | bool) -> bool:
+    if isinstance(a, float) or isinstance(b, float):
+        fa, fb = float(a), float(b)
+        return fa == fb or abs(fa - fb) <= REL_TOLERANCE * max(abs(fa), abs(fb), 1.0)
+    return a == b
+
+
+async def _settle(client: PlcClient, stepped: bool, wait_s: float) -> None:
+    if stepped:
+        await client.step(RESET_SCANS)
+    else:
+        await asyncio.sleep(wait_s)
+
+
+async def reset_to_known_state(
+    client: PlcClient,
+    scenario: Scenario,
+    bindings: Mapping[int, ZoneBinding],
+    codes: ControllerCodes,
+    factory: FactoryState,
+    *,
+    stepped: bool,
+    wait_s: float = EXTERNAL_RESET_WAIT_S,
+) -> None:
+    """Bring every zone of the scenario to the factory state in mode RESET; verified by reading back."""
+    if "RESET" not in codes.modes:
+        return
+    regmap = client.regmap
+    reset_code = codes.modes["RESET"]
+    temps = scenario.build_plant().temperatures()
+    pv_of = {z.plc_zone: float(temps[z.channel]) for z in scenario.zones}
+    fixed: dict[str, float | int | bool] = {}
+    for zone, b in bindings.items():
+        fixed[b["mode"]] = reset_code
+        fixed[b["pv"]] = pv_of[zone]
+    restore = {n: v for n, v in factory.values.items() if n not in fixed and not is_command(regmap, n)}
+    pulses = {n: True for n in factory.values if any(rx.fullmatch(n) for rx in PULSED_COILS)}
+    check = verified_tags(regmap, factory, scenario, bindings)
+    status = [b[r] for b in bindings.values() for r in ("state", "alarm") if b.has(r)]
+    differs: list[str] = []
+    for _attempt in range(ATTEMPTS):
+        await client.write_tags(fixed)
+        await client.write_tags(restore)
+        await _settle(client, stepped, wait_s)
+        if pulses:
+            await client.write_tags(pulses)
+            await _settle(client, stepped, wait_s)
+        got = await client.read_tags(list(fixed) + check + status)
+        differs = [f"{n} = {got[n]!r} (expected {v!r})" for n, v in fixed.items() if not _same(got[n], v)]
+        differs += [f"{n} = {got[n]!r} (factory {factory.values[n]!r})" for n in check
+                    if not _same(got[n], factory.values[n])]
+        for b in bindings.values():
+            if int(got[b["state"]]) != codes.states.get("RESET", reset_code):
+                differs.append(f"{b['state']} = {codes.state_name(int(got[b['state']]))} (expected RESET)")
+            if b.has("alarm") and int(got[b["alarm"]]) != 0:
+                differs.append(f"{b['alarm']} = 0x{int(got[b['alarm']]):08X} (expected no alarm)")
+        if not differs:
+            return
+    raise PlcError(
+        f"{client.where} did not reach a known state after {ATTEMPTS} resets: {'; '.join(differs[:4])}"
+    )

@@ -382,8 +382,17 @@ class _LoopCloser:
             if raw:
                 writes.update(raw_sensor_parameters(seq.binding, z.sensor.adc))
             seq.start(0.0, temps[z.channel], writes)
-        if writes:
-            await self.client.write_tags(writes)
+        await self.write_mode_last(writes)
+
+    async def write_mode_last(self, writes: dict) -> None:
+        """Setpoints and parameters before the mode: a PLC scanning on its own clock between two requests
+        must never see the new mode with the old setpoint (TUNE would start against the wrong W)."""
+        modes = {seq.binding["mode"] for seq in self.seqs}
+        first = {n: v for n, v in writes.items() if n not in modes}
+        last = {n: v for n, v in writes.items() if n in modes}
+        for part in (first, last):
+            if part:
+                await self.client.write_tags(part)
 
     def sequence_and_measure(self, k: int, t: float, temps: list[float]) -> tuple[dict, list[float]]:
         """Phase programmes advance, sensors measure; returns the writes of this step and the PVs."""
@@ -404,19 +413,13 @@ class _LoopCloser:
         """Inputs to the PLC, scans (stepped) or pacing (real time), outputs back; the state when due."""
         sc, client, plan = self.scenario, self.client, self.plan
         if self.realtime:
-            target = self.wall0 + t / self.speed
-            delay = target - time.perf_counter()
-            if delay > 0:
-                await asyncio.sleep(delay)
-            self.result.jitter_ms.append((time.perf_counter() - target) * 1e3)
-            await client.write_tags(writes)
-            values = await client.read_tags(plan.every_step)
-        elif sc.output_path == "pwm" and sc.scans_per_step > 1:
+            return await self._exchange_realtime(k, t, writes)
+        if sc.output_path == "pwm" and sc.scans_per_step > 1:
             values = await _pwm_step(client, writes, sc.scans_per_step, plan.every_step, plan.pwm)
         else:
             values = await client.exchange(writes, sc.scans_per_step, plan.every_step)
         waiting = any(not seq.finished and seq.phase.until is not None for seq in self.seqs)
-        if waiting or self.realtime or k % GAIN_READ_EVERY == 0:
+        if waiting or k % GAIN_READ_EVERY == 0:
             values.update(await client.read_tags(plan.status))
             new_states = [int(values[seq.binding["state"]]) for seq in self.seqs]
             self.error_ids = [
@@ -425,6 +428,29 @@ class _LoopCloser:
         else:
             new_states = list(self.states)  # type: ignore[arg-type]
         if plan.slow and (k % GAIN_READ_EVERY == 0 or new_states != self.states):
+            self.slow_values = await client.read_tags(plan.slow)
+        return values, new_states
+
+    async def _exchange_realtime(self, k: int, t: float, writes: dict) -> tuple[dict, list[int]]:
+        """Real time: the inputs of time t go out at once, the outputs are read at t + dt, when the PLC has
+        scanned them, and drive the plant over [t, t + dt] - the order of the stepped loop, so the harness
+        adds no dead time of its own (reading right after writing returned the output of the previous
+        sample: one plant step of extra delay). Slow reads happen while the step waits."""
+        client, plan = self.client, self.plan
+        await self.write_mode_last(writes)
+        if plan.slow and k % GAIN_READ_EVERY == 0:
+            self.slow_values = await client.read_tags(plan.slow)
+        target = self.wall0 + (t + self.scenario.dt_s) / self.speed
+        delay = target - time.perf_counter()
+        if delay > 0:
+            await asyncio.sleep(delay)
+        self.result.jitter_ms.append((time.perf_counter() - target) * 1e3)
+        values = dict(await client.read_tags(plan.every_step + plan.status))
+        new_states = [int(values[seq.binding["state"]]) for seq in self.seqs]
+        self.error_ids = [
+            int(values[q.binding["error"]]) if q.binding.has("error") else None for q in self.seqs
+        ]
+        if plan.slow and new_states != self.states:
             self.slow_values = await client.read_tags(plan.slow)
         return values, new_states
 

@@ -87,10 +87,11 @@ def run(quick: bool) -> None:
         print(f"  plant integration {name:18s} {us:8.1f} us/step (dt {BENCH_DT_S} s)")
     wall, cpu, code, last = default_run_wall()
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-    status = "ok" if code == 0 else f"exit {code}: {last}"
+    met = "target met" if wall < DEFAULT_TARGET_S else "target MISSED"
+    status = met if code == 0 else f"{met}; the run failed: exit {code}: {last}"
     print(
-        f"  `thermost run` (default scenario, all variants, reports): {wall:.2f} s wall, {cpu:.2f} s CPU "
-        f"(target < {DEFAULT_TARGET_S:.0f} s wall; load average {load:.1f}, {os.cpu_count()} cores) {status}"
+        f"  `thermost run` (default scenario, all variants, reports): {wall:.2f} s wall, {cpu:.2f} s CPU, "
+        f"target < {DEFAULT_TARGET_S:.0f} s wall: {status} (load average {load:.1f}, {os.cpu_count()} cores)"
     )
     names = [] if quick else [p.stem for p in shipped_scenarios()]
     for name in names:

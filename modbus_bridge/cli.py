@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import os
 import sys
 import time
 from pathlib import Path
 
-from plc.cli import UserError
+from plc.cli import UserError, writable_file
 
 from .regmap import RegisterMapError, load_register_map, markdown
 from .scenario import ScenarioError, load_scenario, resolve_scenario, shipped_scenarios
@@ -41,11 +42,25 @@ def main_regmap(args: argparse.Namespace) -> int:
         ]
         text = "\n".join(lines) + "\n"
     if args.output:
-        Path(args.output).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.output).write_text(text, encoding="utf-8")
+        output = writable_file(args.output)
+        try:
+            output.parent.mkdir(parents=True, exist_ok=True)
+            output.write_text(text, encoding="utf-8")
+        except OSError as exc:
+            raise UserError(f"{output}: cannot write: {exc.strerror or exc}") from None
     else:
         sys.stdout.write(text)
     return 0
+
+
+def check_out_dir(out_dir: Path) -> None:
+    """The report directory: an existing directory or one that can be made (never a file)."""
+    existing = next((p for p in (out_dir, *out_dir.parents) if p.exists()), Path("."))
+    if not existing.is_dir():
+        what = "the report directory" if existing == out_dir else f"{existing} (in the path)"
+        raise UserError(f"--out {out_dir}: {what} is a file, expected a directory")
+    if not os.access(existing, os.W_OK):
+        raise UserError(f"--out {out_dir}: {existing} is not writable")
 
 
 def main_run(args: argparse.Namespace) -> int:
@@ -68,8 +83,6 @@ def main_run(args: argparse.Namespace) -> int:
         scenario = load_scenario(resolve_scenario(args.scenario))
     except ScenarioError as exc:
         raise UserError(str(exc)) from None
-    if args.speed <= 0:
-        raise UserError(f"--speed must be > 0, got {args.speed}")
     if args.speed != 1.0 and not args.plc:
         raise UserError(
             "--speed N needs a PLC whose TASK interval was shortened N times (use --plc HOST:PORT); "
@@ -92,6 +105,7 @@ def main_run(args: argparse.Namespace) -> int:
     except RegisterMapError as exc:
         raise UserError(str(exc)) from None
     out_dir = Path(args.out) if args.out else OUT_DIR / slug(scenario.name)
+    check_out_dir(out_dir)
     bar = ProgressBar(scenario.name)
     bar.enabled = not args.quiet
     try:

@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 
 from plc.cli import lazy_handler as _lazy
+from plc.cli import positive_float
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -25,7 +26,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--realtime", action="store_true", help="embedded soft-PLC on its real-time clock")
     p.add_argument(
         "--speed",
-        type=float,
+        type=positive_float,
         default=1.0,
         metavar="N",
         help="real time only: plant runs N x faster than the wall clock (shorten the TASK interval)",

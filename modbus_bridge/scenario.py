@@ -344,11 +344,13 @@ def _phase(tab: _Table) -> Phase:
 
 def load_scenario(path: str | Path) -> Scenario:
     """Parse and validate a scenario file; raises ScenarioError (file, key, why) on any problem."""
+    from plc.cli import UserError, read_text_file
+
     file = Path(path)
     try:
-        data = tomllib.loads(file.read_text(encoding="utf-8"))
-    except FileNotFoundError as exc:
-        raise ScenarioError(f"{file}: no such scenario file") from exc
+        data = tomllib.loads(read_text_file(str(file), "scenario file"))
+    except UserError as exc:
+        raise ScenarioError(str(exc)) from None
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(f"{file}: not valid TOML: {exc}") from exc
     top = _Table(file, "", data)

@@ -18,7 +18,7 @@ import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from plc.cli import UserError
+from plc.cli import UserError, writable_file
 
 ROOT = Path(__file__).resolve().parents[1]
 LIBRARY_DIR = "st_lib"
@@ -207,9 +207,12 @@ def main_bundle(args: argparse.Namespace) -> int:
     if not declarations:
         raise UserError(f"nothing to bundle: no .st files under {LIBRARY_DIR}/ or {APP_DIR}/")
     text = with_speed(render(declarations), int(getattr(args, "speed", 1) or 1))
-    output = Path(args.output)
-    output.parent.mkdir(parents=True, exist_ok=True)
-    output.write_text(text, encoding="utf-8")
+    output = writable_file(args.output)
+    try:
+        output.parent.mkdir(parents=True, exist_ok=True)
+        output.write_text(text, encoding="utf-8")
+    except OSError as exc:
+        raise UserError(f"{output}: cannot write: {exc.strerror or exc}") from None
     configurations = [d for d in declarations if d.kind == "CONFIGURATION"]
     if len(configurations) != 1:
         sys.stderr.write(f"thermost: warning: {len(configurations)} CONFIGURATIONs in the bundle "

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 
 from plc.cli import lazy_handler as _lazy
+from plc.cli import port_number, positive_int
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -19,13 +20,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("plc", help="run the embedded soft-PLC with OpenPLC's Modbus TCP map")
     p.add_argument("file", nargs="?", help=".st file (default: the bundled library + application)")
     p.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1)")
-    p.add_argument("--port", type=int, default=5020, help="Modbus TCP port (default 5020)")
+    p.add_argument("--port", type=port_number, default=5020, help="Modbus TCP port (default 5020; 0: any)")
     p.add_argument("--stepped", action="store_true", help="PLC time advances only when a client asks")
     p.set_defaults(handler=_lazy("plc.runtime.cli:main_plc"))
 
     p = sub.add_parser("bundle", help="write the single .st file to upload to OpenPLC")
     p.add_argument("-o", "--output", required=True, metavar="FILE")
-    p.add_argument("--speed", type=int, default=1, metavar="N",
+    p.add_argument("--speed", type=positive_int, default=1, metavar="N",
                    help="divide the TASK interval by N (controllers keep their cycle time: the plant of a "
                         "real-time harness runs N x faster, e.g. `thermost run --plc H:P --speed N`)")
     p.set_defaults(handler=_lazy("plc.bundle:main_bundle"))

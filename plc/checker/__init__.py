@@ -2,7 +2,7 @@
 
 `check_sources([(filename, text), ...])` returns sorted diagnostics (`file:line:col: message`);
 `main_check(args)` is the `thermost check FILE...` sub-command (a directory stands for its .st
-files): exit 0 when clean, 1 when any error, 2 when a file cannot be read.
+files): exit 0 when clean, 1 when any error, 2 (one line) when a file cannot be read or is empty.
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ from pathlib import Path
 from plc.checker.lexical import scan
 from plc.checker.rules import FileChecker
 from plc.checker.symbols import collect
+from plc.cli import UserError, read_text_file
 from plc.st.diagnostics import Diagnostic
 from plc.st.parser import parse_source
 
@@ -46,13 +47,16 @@ def _expand(paths: list[str]) -> list[str]:
 
 def main_check(args: argparse.Namespace) -> int:
     sources: list[tuple[str, str]] = []
-    for name in _expand(args.files):
+    names = _expand(args.files)
+    if not names:
+        raise UserError(f"no .st files in {', '.join(args.files)}")
+    for name in names:
         try:
-            with open(name, encoding="utf-8") as handle:
-                sources.append((name, handle.read()))
-        except (OSError, UnicodeDecodeError) as exc:
-            reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
-            sys.stderr.write(f"{name}:1:1: cannot read file: {reason}\n")
+            sources.append((name, read_text_file(name, "ST file", code=True)))
+        except UserError as exc:  # the checker's own format: file:line:col: message
+            reason = str(exc).removeprefix(f"{name}: ")
+            what = "" if reason.startswith("empty") else "cannot read file: "
+            sys.stderr.write(f"{name}:1:1: {what}{reason}\n")
             return 2
     diagnostics = check_sources(sources)
     for d in diagnostics:

@@ -11,9 +11,8 @@ import asyncio
 import logging
 import signal
 import sys
-from pathlib import Path
 
-from plc.cli import UserError
+from plc.cli import UserError, read_text_file
 from plc.runtime.engine import ApplicationLike
 from plc.runtime.server import SoftPlc
 
@@ -37,16 +36,18 @@ def load_for_cli(file: str | None) -> ApplicationLike:
 
         filename, text = BUNDLE_NAME, bundle_text()
     else:
-        path = Path(file)
-        if not path.is_file():
-            raise UserError(f"no such file: {file}")
-        filename, text = str(path), path.read_text(encoding="utf-8")
+        filename, text = file, read_text_file(file, "ST file", code=True)
     try:
-        return load_application([(filename, text)])
+        app = load_application([(filename, text)])
     except StError as exc:
         for diagnostic in getattr(exc, "diagnostics", []):
             sys.stderr.write(f"{diagnostic}\n")
         raise UserError(f"{filename} does not compile") from exc
+    if not getattr(app, "programs", True):
+        raise UserError(
+            f"{filename}: nothing to run: no CONFIGURATION with a PROGRAM instance (OpenPLC needs one)"
+        )
+    return app
 
 
 async def serve(app: ApplicationLike, host: str, port: int, stepped: bool) -> int:

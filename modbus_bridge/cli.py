@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import asyncio
 import os
 import sys
 import time
@@ -15,6 +14,7 @@ from .regmap import RegisterMapError, load_register_map, markdown
 from .scenario import ScenarioError, load_scenario, resolve_scenario, shipped_scenarios
 
 OUT_DIR = Path("out")
+INTERRUPTED_EXIT = 130  # as a shell reports a process ended by SIGINT
 
 
 def main_scenarios(args: argparse.Namespace) -> int:
@@ -67,16 +67,10 @@ def main_run(args: argparse.Namespace) -> int:
     from .analysis import run_metrics
     from .client import PlcError
     from .loop import check_bindings
+    from .progress import RunProgress, quiet_libraries
     from .report import slug, summary_rows, text_table, write_reports
-    from .runner import (
-        FleetJob,
-        HarnessSetup,
-        ProgressBar,
-        parse_host_port,
-        run_fleet,
-        run_variants,
-        run_variants_parallel,
-    )
+    from .runner import FleetJob, HarnessSetup, parse_host_port, run_fleet, run_variants
+    from .workers import run_async_interruptible, run_variants_parallel
 
     t_start = time.perf_counter()
     try:
@@ -106,32 +100,39 @@ def main_run(args: argparse.Namespace) -> int:
         raise UserError(str(exc)) from None
     out_dir = Path(args.out) if args.out else OUT_DIR / slug(scenario.name)
     check_out_dir(out_dir)
-    bar = ProgressBar(scenario.name)
-    bar.enabled = not args.quiet
+    quiet_libraries(getattr(args, "verbose", False))
+    names = [v.name for v in scenario.variants]
+    if len(plcs) > 1:
+        names = [f"{v.name} @ {address}" for v, address in zip(scenario.variants, plcs, strict=True)]
+    stop_reason: str | None = None
     try:
-        if len(plcs) > 1:  # variant i on PLC i, all at once (side by side on real hardware)
-            jobs = [FleetJob(scenario, address, i) for i, address in enumerate(plcs)]
-            results = asyncio.run(run_fleet(jobs, setup, speed=args.speed))
-            runs = [(r, run_metrics(r)) for r in results]
-        elif plcs or args.realtime:
-            runs = asyncio.run(
-                run_variants(
-                    scenario,
-                    setup,
-                    plc=plcs[0] if plcs else None,
-                    realtime=args.realtime,
-                    speed=args.speed,
-                    progress=bar,
+        with RunProgress(names, enabled=not args.quiet) as progress:
+            if len(plcs) > 1:  # variant i on PLC i, all at once (side by side on real hardware)
+                jobs = [FleetJob(scenario, address, i) for i, address in enumerate(plcs)]
+                results = run_async_interruptible(lambda stop: run_fleet(jobs, setup, speed=args.speed))
+                runs = [(r, run_metrics(r) if r.zones and r.zones[0].t else []) for r in results]
+            elif plcs or args.realtime:
+                runs = run_async_interruptible(
+                    lambda stop: run_variants(
+                        scenario,
+                        setup,
+                        plc=plcs[0] if plcs else None,
+                        realtime=args.realtime,
+                        speed=args.speed,
+                        progress_for=progress.callback,
+                        should_stop=stop,
+                    )
                 )
-            )
-        else:  # embedded stepped soft-PLC: controller variants run side by side in parallel processes
-            runs = run_variants_parallel(scenario, setup, progress=bar, plot_dir=out_dir)
+            else:  # embedded stepped soft-PLC: controller variants side by side in parallel processes
+                runs = run_variants_parallel(
+                    scenario, setup, progress_for=progress.callback, plot_dir=out_dir
+                )
     except PlcError as exc:
         raise UserError(str(exc)) from None
     except RegisterMapError as exc:
         raise UserError(str(exc)) from None
-    finally:
-        bar.close()
+    if any(r.interrupted for r, _ in runs):
+        stop_reason = next(r.error for r, _ in runs if r.interrupted)
     written = write_reports(runs, out_dir)
     header, rows = summary_rows(runs)
     print(text_table(header, rows))
@@ -149,8 +150,11 @@ def main_run(args: argparse.Namespace) -> int:
         f"report: {written['summary_md']} (metrics.json, CSV and PNG beside it); "
         f"total {time.perf_counter() - t_start:.2f} s"
     )
+    if stop_reason is not None:
+        sys.stderr.write(f"thermost: {stop_reason}: partial report in {out_dir}\n")
+        return INTERRUPTED_EXIT
     errors = [r.error for r, _ in runs if r.error]
     if errors:
-        sys.stderr.write(f"thermost: {errors[0]} (trace so far kept in {out_dir})\n")
+        sys.stderr.write(f"thermost: {errors[0]} (partial report of what was measured in {out_dir})\n")
         return 1
     return 0

@@ -33,6 +33,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--out", metavar="DIR", help="report directory (default out/<scenario>)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("-v", "--verbose", action="store_true", help="log lines of the Modbus library too")
     p.set_defaults(handler=_lazy("modbus_bridge.cli:main_run"))
 
     p = sub.add_parser("scenarios", help="list the shipped scenarios")

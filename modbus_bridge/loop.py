@@ -94,6 +94,7 @@ class RunResult:
     realtime: bool = False
     jitter_ms: list[float] = field(default_factory=list)
     error: str | None = None
+    interrupted: bool = False  # stopped by SIGINT/SIGTERM: the trace is what was measured until then
     plot_path: str | None = None  # set when the plot was already drawn (parallel variants draw their own)
 
 
@@ -170,6 +171,20 @@ class ZoneSequencer:
 
     def start(self, t: float, pv: float, writes: dict) -> None:
         self._enter(t, pv, writes)
+
+    def planned_end(self, t: float) -> float:
+        """When this zone's programme should end, as planned now: a phase waiting for an event counts at
+        its timeout; a finished zone ended when its last phase did."""
+        if self.finished:
+            return self.trace.phases[-1].t_end if self.trace.phases else t
+        end = t
+        for i, ph in enumerate(self.zone.phases[self.index :]):
+            start = self.phase_start if i == 0 else end
+            if ph.end_at_s is not None:
+                end = max(start, ph.end_at_s)
+            else:
+                end = start + (ph.duration_s or ph.timeout_s or 0.0)
+        return max(end, t)
 
     def update(
         self, t: float, dt: float, pv: float, state: int | None, writes: dict, error_id: int | None = None
@@ -309,6 +324,7 @@ def check_bindings(
 
 
 ProgressFn = Callable[[float, float], None]
+StopFn = Callable[[], str | None]  # the reason to stop now (e.g. "interrupted by SIGINT"), else None
 
 
 @dataclass
@@ -487,6 +503,10 @@ class _LoopCloser:
                     if b.has(role):
                         tr.phases[-1].tuned[role] = float(self.slow_values[b[role]])
 
+    def planned_total(self, t: float, horizon: float) -> float:
+        """The plant time the run needs as planned at time t (the progress total)."""
+        return min(horizon, max(seq.planned_end(t) for seq in self.seqs))
+
     def finish(self, k: int) -> None:
         end_t = k * self.scenario.dt_s
         for tr in self.traces:
@@ -511,8 +531,11 @@ async def close_loop(
     speed: float = 1.0,
     progress: ProgressFn | None = None,
     max_plant_time_s: float | None = None,
+    should_stop: StopFn | None = None,
 ) -> RunResult:
-    """Run the scenario against one PLC. PLC errors end the run with `error` set; the trace so far is kept."""
+    """Run the scenario against one PLC. PLC errors end the run with `error` set; the trace so far is kept.
+    `should_stop` is asked every step; a reason ends the run the same way, `interrupted` set (so does a
+    cancellation of the task)."""
     check_bindings(scenario, bindings, codes, client.regmap)
     run = _LoopCloser(scenario, variant, client, bindings, codes, realtime, speed)
     horizon = max_plant_time_s or scenario.nominal_duration_s
@@ -528,6 +551,9 @@ async def close_loop(
             writes, measured = run.sequence_and_measure(k, t, temps)
             if all(seq.finished for seq in run.seqs):
                 break
+            if should_stop is not None and (reason := should_stop()):
+                run.result.error, run.result.interrupted = reason, True
+                break
             values, states = await run.exchange(k, t, writes)
             run.record(t, temps, measured, values, states)
             c0 = time.perf_counter()
@@ -535,11 +561,15 @@ async def close_loop(
             run.result.plant_cpu_s += time.perf_counter() - c0
             k += 1
             if progress is not None and k % PROGRESS_EVERY == 0:
-                progress(t + dt, horizon)
+                progress(t + dt, run.planned_total(t + dt, horizon))
     except (PlcError, RegisterMapError) as exc:
         run.result.error = str(exc)
+    except asyncio.CancelledError:  # interrupted while waiting for the PLC: keep what was measured
+        run.result.error, run.result.interrupted = "interrupted", True
     finally:
         run.finish(k)
         if progress is not None:
-            progress(min(run.result.plant_time_s, horizon), horizon)
+            done = min(run.result.plant_time_s, horizon)
+            # a run that went to its end is 100 %; an aborted one shows how far it got of the plan
+            progress(done, done if run.result.error is None else run.planned_total(done, horizon))
     return run.result

@@ -170,24 +170,34 @@ def text_table(header: list[str], rows: list[list[str]]) -> str:
     return "\n".join(out)
 
 
+def partial_reason(runs: list[tuple[RunResult, list[PhaseMetrics]]]) -> str | None:
+    """Why the run is incomplete (the first variant's error), or None for a complete run."""
+    return next((f"{r.variant.name}: {r.error}" for r, _ in runs if r.error), None)
+
+
 def write_reports(runs: list[tuple[RunResult, list[PhaseMetrics]]], out_dir: Path) -> dict[str, Path]:
     out_dir.mkdir(parents=True, exist_ok=True)
     written: dict[str, Path] = {}
     scenario = runs[0][0].scenario
+    partial = partial_reason(runs)
     doc = {
         "scenario": scenario.name,
         "file": str(scenario.path),
         "description": scenario.description,
         "reference": scenario.reference,
+        "complete": not partial,
+        "partial_reason": partial,
         "variants": [],
     }
     for result, pms in runs:
         tag = slug(result.variant.name)
         csv_path, png_path = out_dir / f"trace_{tag}.csv", out_dir / f"plot_{tag}.png"
         write_csv(result, csv_path)
-        if result.plot_path is None or Path(result.plot_path) != png_path or not png_path.exists():
-            write_plot(result, png_path)
-        written[f"csv:{tag}"], written[f"png:{tag}"] = csv_path, png_path
+        written[f"csv:{tag}"] = csv_path
+        if any(tr.t for tr in result.zones):
+            if result.plot_path is None or Path(result.plot_path) != png_path or not png_path.exists():
+                write_plot(result, png_path)
+            written[f"png:{tag}"] = png_path
         doc["variants"].append(
             {
                 "name": result.variant.name,
@@ -219,7 +229,11 @@ def write_reports(runs: list[tuple[RunResult, list[PhaseMetrics]]], out_dir: Pat
     metrics_path.write_text(json.dumps(doc, indent=2, default=str) + "\n", encoding="utf-8")
     written["metrics"] = metrics_path
     header, rows = summary_rows(runs)
-    md = [f"# {scenario.name}", "", scenario.description, ""]
+    md = [f"# {scenario.name}", ""]
+    if partial:
+        md += [f"> **PARTIAL REPORT** - the run did not complete ({partial}); the figures below are what "
+               "was measured until then.", ""]
+    md += [scenario.description, ""]
     if scenario.reference:
         md += [f"Reference: {scenario.reference}", ""]
     for result, _ in runs:
@@ -233,6 +247,8 @@ def write_reports(runs: list[tuple[RunResult, list[PhaseMetrics]]], out_dir: Pat
     md += ["", *[f"![{r.variant.name}](plot_{slug(r.variant.name)}.png)" for r, _ in runs], ""]
     (out_dir / "summary.md").write_text("\n".join(md), encoding="utf-8")
     written["summary_md"] = out_dir / "summary.md"
+    banner = (f"<p><strong>PARTIAL REPORT</strong> - the run did not complete ({html.escape(partial)}); the "
+              "figures below are what was measured until then.</p>") if partial else ""
     cells = "".join(f"<th>{html.escape(h)}</th>" for h in header)
     body = "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in r) + "</tr>" for r in rows)
     imgs = "".join(
@@ -242,7 +258,7 @@ def write_reports(runs: list[tuple[RunResult, list[PhaseMetrics]]], out_dir: Pat
     page = (
         f"<!doctype html><html><head><meta charset='utf-8'><title>{html.escape(scenario.name)}</title>"
         "<style>table{border-collapse:collapse}td,th{border:1px solid #999;padding:2px 6px}</style>"
-        f"</head><body><h1>{html.escape(scenario.name)}</h1><p>{html.escape(scenario.description)}</p>"
+        f"</head><body><h1>{html.escape(scenario.name)}</h1>{banner}<p>{html.escape(scenario.description)}</p>"
         f"<table><tr>{cells}</tr>{body}</table>{imgs}</body></html>\n"
     )
     (out_dir / "summary.html").write_text(page, encoding="utf-8")

@@ -5,18 +5,17 @@ real time, or an external PLC at HOST:PORT), one run per controller variant, met
 from __future__ import annotations
 
 import asyncio
-import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from pathlib import Path
 
 from .analysis import PhaseMetrics, run_metrics
 from .binding import ControllerCodes, ZoneBinding, resolve_zone
-from .client import PlcClient
-from .loop import ProgressFn, RunResult, close_loop
+from .client import PlcClient, PlcError
+from .loop import ProgressFn, RunResult, StopFn, close_loop
 from .regmap import RegisterMap, load_register_map
 from .reset import FactoryState, reset_to_known_state
-from .scenario import Scenario
+from .scenario import Scenario, Variant
 
 
 @dataclass
@@ -70,6 +69,14 @@ async def _reset_controllers(
     await reset_to_known_state(client, scenario, bindings, setup.codes, factory, stepped=stepped)
 
 
+ProgressFor = Callable[[int], ProgressFn]  # variant index -> its progress callback
+
+
+def _not_run(scenario: Scenario, variant: Variant, why: str, realtime: bool) -> RunResult:
+    """A variant the harness could not start (the PLC was lost before it): an empty, failed result."""
+    return RunResult(scenario=scenario, variant=variant, zones=[], realtime=realtime, error=why)
+
+
 async def run_variants(
     scenario: Scenario,
     setup: HarnessSetup,
@@ -77,149 +84,64 @@ async def run_variants(
     plc: str | None = None,
     realtime: bool = False,
     speed: float = 1.0,
-    progress: ProgressFn | None = None,
+    progress_for: ProgressFor | None = None,
     max_plant_time_s: float | None = None,
+    should_stop: StopFn | None = None,
 ) -> list[tuple[RunResult, list[PhaseMetrics]]]:
-    """One run per variant; with the embedded soft-PLC each variant gets a freshly loaded program."""
+    """One run per variant; with the embedded soft-PLC each variant gets a freshly loaded program.
+    A PLC that cannot be reached before the first variant is an error (PlcError); one lost later ends
+    the run: the variants measured so far are kept, the rest are reported as not run."""
     bindings = setup.bindings(scenario)
     runs: list[tuple[RunResult, list[PhaseMetrics]]] = []
 
-    async def reset_and_run(client: PlcClient, variant, stepped: bool) -> RunResult:
+    async def reset_and_run(client: PlcClient, index: int, stepped: bool) -> RunResult:
         # the application takes its parameter registers from the controller on its first scan:
         # reset (and scan) before the scenario writes anything
         await _reset_controllers(client, scenario, setup, bindings, stepped)
         return await close_loop(
             scenario,
-            variant,
+            scenario.variants[index],
             client,
             bindings,
             setup.codes,
             realtime=not stepped,
             speed=speed,
-            progress=progress,
+            progress=progress_for(index) if progress_for else None,
             max_plant_time_s=max_plant_time_s,
+            should_stop=should_stop,
         )
 
-    for variant in scenario.variants:
-        if plc is not None:
-            host, port = parse_host_port(plc)
-            async with PlcClient(host, port, setup.regmap, name="PLC") as client:
-                result = await reset_and_run(client, variant, await client.stepped())
-        else:
-            from plc.runtime.server import SoftPlc
-
-            t0 = time.perf_counter()
-            text = setup.program_text()
-            async with SoftPlc(text, host="127.0.0.1", port=0, stepped=not realtime) as soft:
-                setup.startup_s += time.perf_counter() - t0
-                async with PlcClient("127.0.0.1", soft.port, setup.regmap, name="soft-PLC") as client:
-                    result = await reset_and_run(client, variant, stepped=not realtime)
-        runs.append((result, run_metrics(result)))
-    return runs
-
-
-class ProgressBar:
-    """A one-line progress bar on stderr (plant time done / planned)."""
-
-    WIDTH = 30
-
-    def __init__(self, label: str, stream=sys.stderr) -> None:
-        self.label, self.stream = label, stream
-        self.enabled = True
-
-    def __call__(self, done: float, total: float) -> None:
-        if not self.enabled or total <= 0:
-            return
-        frac = min(1.0, done / total)
-        filled = int(self.WIDTH * frac)
-        self.stream.write(
-            f"\r{self.label} [{'#' * filled}{'.' * (self.WIDTH - filled)}] {done:6.0f}/{total:.0f} s"
-        )
-        self.stream.flush()
-
-    def close(self) -> None:
-        if self.enabled:
-            self.stream.write("\n")
-            self.stream.flush()
-
-
-def _child_run(scenario: Scenario, setup: HarnessSetup, index: int, queue, kwargs: dict) -> None:
-    """One variant in a forked process; progress and the result (or the exception) go through `queue`."""
-    import dataclasses
-
-    def progress(done: float, total: float) -> None:
-        queue.put(("progress", index, done, total))
-
-    try:
-        single = dataclasses.replace(scenario, variants=[scenario.variants[index]])
-        plot_dir = kwargs.pop("plot_dir", None)
-        runs = asyncio.run(run_variants(single, setup, progress=progress, **kwargs))
-        result = runs[0][0]
-        if plot_dir is not None:  # draw in parallel too
-            from .report import slug, write_plot
-
-            path = Path(plot_dir) / f"plot_{slug(result.variant.name)}.png"
-            path.parent.mkdir(parents=True, exist_ok=True)
-            write_plot(result, path)
-            result.plot_path = str(path)
-        queue.put(("result", index, runs[0]))
-    except BaseException as exc:  # noqa: BLE001 - handed to the parent, which re-raises it
-        queue.put(("error", index, exc))
-
-
-def run_variants_parallel(
-    scenario: Scenario,
-    setup: HarnessSetup,
-    *,
-    progress: ProgressFn | None = None,
-    max_plant_time_s: float | None = None,
-    plot_dir: Path | None = None,
-) -> list[tuple[RunResult, list[PhaseMetrics]]]:
-    """Variants on the embedded stepped soft-PLC, one forked process each (they share nothing: every
-    process loads its own soft-PLC), so a side-by-side comparison costs the wall time of one run on a
-    multi-core machine. Falls back to sequential runs where fork is unavailable."""
-    import multiprocessing as mp
-
-    if len(scenario.variants) < 2 or "fork" not in mp.get_all_start_methods():
-        return asyncio.run(
-            run_variants(scenario, setup, progress=progress, max_plant_time_s=max_plant_time_s)
-        )
-    setup.program_text()  # bundle once, before forking
-    setup.factory_state()
-    ctx = mp.get_context("fork")
-    queue = ctx.Queue()
-    kwargs = {"max_plant_time_s": max_plant_time_s, "plot_dir": plot_dir}
-    procs = [
-        ctx.Process(target=_child_run, args=(scenario, setup, i, queue, kwargs), daemon=True)
-        for i in range(len(scenario.variants))
-    ]
-    t0 = time.perf_counter()
-    for p in procs:
-        p.start()
-    results: dict[int, tuple[RunResult, list[PhaseMetrics]]] = {}
-    done = [0.0] * len(procs)
-    total = [0.0] * len(procs)
-    error: BaseException | None = None
-    try:
-        while len(results) + (error is not None) < len(procs) and error is None:
-            kind, index, *payload = queue.get()
-            if kind == "progress":
-                done[index], total[index] = payload
-                if progress is not None:
-                    progress(sum(done), sum(total))
-            elif kind == "result":
-                results[index] = payload[0]
+    lost: str | None = None
+    for index, variant in enumerate(scenario.variants):
+        stop = lost or (should_stop() if should_stop else None)
+        if stop:
+            result = _not_run(scenario, variant, f"not run: {stop}", realtime or plc is not None)
+            runs.append((result, []))
+            continue
+        try:
+            if plc is not None:
+                host, port = parse_host_port(plc)
+                async with PlcClient(host, port, setup.regmap, name="PLC") as client:
+                    result = await reset_and_run(client, index, await client.stepped())
             else:
-                error = payload[0]
-    finally:
-        for p in procs:
-            p.join(timeout=0.5 if error is None else 0.0)
-            if p.is_alive():
-                p.terminate()
-    if error is not None:
-        raise error
-    setup.startup_s = time.perf_counter() - t0 - max(r.wall_s for r, _ in results.values())
-    return [results[i] for i in range(len(procs))]
+                from plc.runtime.server import SoftPlc
+
+                t0 = time.perf_counter()
+                text = setup.program_text()
+                async with SoftPlc(text, host="127.0.0.1", port=0, stepped=not realtime) as soft:
+                    setup.startup_s += time.perf_counter() - t0
+                    async with PlcClient("127.0.0.1", soft.port, setup.regmap, name="soft-PLC") as client:
+                        result = await reset_and_run(client, index, stepped=not realtime)
+        except PlcError as exc:
+            if not runs:
+                raise
+            lost = str(exc)
+            runs.append((_not_run(scenario, variant, lost, True), []))
+            continue
+        if result.error and not result.interrupted and plc is not None:
+            lost = result.error  # the PLC stopped answering: the next variants would wait for it in vain
+        runs.append((result, run_metrics(result) if any(z.t for z in result.zones) else []))
+    return runs
 
 
 @dataclass

@@ -7,10 +7,13 @@ the first scans of a freshly loaded program. They are taken once from a referenc
 1. every zone to mode RESET (output 0 at once) and its process value to the plant's start temperature,
    so a faulty PV of the previous run cannot latch an alarm again;
 2. every client-writable register and coil back to its factory value (parameters, limits, tuned gains,
-   fuzzy registers; self-resetting command coils excepted);
-3. a few scans, then the alarms acknowledged and restored fuzzy registers applied (command coils);
+   fuzzy registers; self-resetting command coils and registers the PLC owns excepted);
+3. a few scans, then the alarms acknowledged (command coil);
 4. read back: mode and state RESET, alarm word 0, PV as written, every parameter as restored. A PLC that
    does not get there is retried a few times, then the run is refused with one line naming what differs.
+
+Not reachable over Modbus: the identified plant of the last TUNE (Ks/Tu/Tg, owned by the PLC) and what
+the fuzzy adapter derived from it stay until the next TUNE or a restart of the PLC.
 """
 
 from __future__ import annotations
@@ -32,7 +35,7 @@ ATTEMPTS = 3
 REL_TOLERANCE = 1e-6  # REAL read back through float32
 # coils a client sets TRUE for one scan (the PLC clears them): never restored, pulsed where named below
 COMMAND_COIL = re.compile(r"self-resetting|write TRUE", re.IGNORECASE)
-PULSED_COILS = (re.compile(r"bAckZone\d+", re.IGNORECASE), re.compile(r"bFuzzyLoadZone\d+", re.IGNORECASE))
+PULSED_COILS = (re.compile(r"bAckZone\d+", re.IGNORECASE),)
 # parameters checked on read back when the register map carries no owner metadata
 VERIFIED_ROLES = ("kp", "tn", "tv", "td", "kp_cool", "tn_cool", "tv_cool", "setpoint", "manual", "fuzzy")
 
@@ -125,9 +128,13 @@ async def reset_to_known_state(
     for zone, b in bindings.items():
         fixed[b["mode"]] = reset_code
         fixed[b["pv"]] = pv_of[zone]
-    restore = {n: v for n, v in factory.values.items() if n not in fixed and not is_command(regmap, n)}
+    restore = {
+        n: v
+        for n, v in factory.values.items()
+        if n not in fixed and not is_command(regmap, n) and _owner(regmap, n) != "plc"
+    }
     pulses = {n: True for n in factory.values if any(rx.fullmatch(n) for rx in PULSED_COILS)}
-    check = verified_tags(regmap, factory, scenario, bindings)
+    check = [n for n in verified_tags(regmap, factory, scenario, bindings) if n not in fixed]
     status = [b[r] for b in bindings.values() for r in ("state", "alarm") if b.has(r)]
     differs: list[str] = []
     for _attempt in range(ATTEMPTS):

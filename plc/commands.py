@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 
 from plc.cli import lazy_handler as _lazy
-from plc.cli import port_number, positive_int
+from plc.cli import port_number, positive_float, positive_int
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -22,6 +22,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1)")
     p.add_argument("--port", type=port_number, default=5020, help="Modbus TCP port (default 5020; 0: any)")
     p.add_argument("--stepped", action="store_true", help="PLC time advances only when a client asks")
+    p.add_argument("--persist", metavar="FILE",
+                   help="OpenPLC's persistent storage: keep %%MW/%%MD/%%ML in FILE across restarts")
+    p.add_argument("--persist-period", type=positive_float, default=10.0, metavar="S",
+                   help="save the store every S seconds when a kept value changed (default 10, as OpenPLC)")
     p.set_defaults(handler=_lazy("plc.runtime.cli:main_plc"))
 
     p = sub.add_parser("bundle", help="write the single .st file to upload to OpenPLC")

@@ -1,4 +1,4 @@
-"""Sub-commands of the harness: `thermost run`, `thermost scenarios`, `thermost regmap`.
+"""Sub-commands of the harness: `thermost run`, `thermost params`, `thermost scenarios`, `thermost regmap`.
 
 Handlers are imported lazily so `thermost --help` stays fast.
 """
@@ -35,6 +35,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("-v", "--verbose", action="store_true", help="log lines of the Modbus library too")
     p.set_defaults(handler=_lazy("modbus_bridge.cli:main_run"))
+
+    p = sub.add_parser("params", help="save a PLC's parameter set to a file, or load it back")
+    p.add_argument("action", choices=("save", "load"))
+    p.add_argument("file", metavar="FILE", help="JSON parameter file")
+    p.add_argument("--plc", metavar="HOST:PORT", required=True, help="the PLC (OpenPLC or `thermost plc`)")
+    p.set_defaults(handler=_lazy("modbus_bridge.params:main_params"))
 
     p = sub.add_parser("scenarios", help="list the shipped scenarios")
     p.set_defaults(handler=_lazy("modbus_bridge.cli:main_scenarios"))

@@ -17,7 +17,32 @@ OUT_DIR = Path("out")
 INTERRUPTED_EXIT = 130  # as a shell reports a process ended by SIGINT
 
 
+def schema_text() -> str:
+    import json
+
+    from .scenario_schema import json_schema
+
+    return json.dumps(json_schema(), indent=2, sort_keys=True) + "\n"
+
+
+def write_output(name: str, text: str) -> None:
+    output = writable_file(name)
+    try:
+        output.parent.mkdir(parents=True, exist_ok=True)
+        output.write_text(text, encoding="utf-8")
+    except OSError as exc:
+        raise UserError(f"{output}: cannot write: {exc.strerror or exc}") from None
+
+
 def main_scenarios(args: argparse.Namespace) -> int:
+    if getattr(args, "schema", False):
+        if args.output:
+            write_output(args.output, schema_text())
+        else:
+            sys.stdout.write(schema_text())
+        return 0
+    if getattr(args, "output", None):
+        raise UserError("-o needs --schema")
     for path in shipped_scenarios():
         try:
             sc = load_scenario(path)
@@ -42,12 +67,7 @@ def main_regmap(args: argparse.Namespace) -> int:
         ]
         text = "\n".join(lines) + "\n"
     if args.output:
-        output = writable_file(args.output)
-        try:
-            output.parent.mkdir(parents=True, exist_ok=True)
-            output.write_text(text, encoding="utf-8")
-        except OSError as exc:
-            raise UserError(f"{output}: cannot write: {exc.strerror or exc}") from None
+        write_output(args.output, text)
     else:
         sys.stdout.write(text)
     return 0

@@ -42,7 +42,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--plc", metavar="HOST:PORT", required=True, help="the PLC (OpenPLC or `thermost plc`)")
     p.set_defaults(handler=_lazy("modbus_bridge.params:main_params"))
 
-    p = sub.add_parser("scenarios", help="list the shipped scenarios")
+    p = sub.add_parser("scenarios", help="list the shipped scenarios, or the JSON Schema of the format")
+    p.add_argument("--schema", action="store_true", help="print the JSON Schema of scenario files instead")
+    p.add_argument("-o", "--output", metavar="FILE", help="with --schema: write to FILE")
     p.set_defaults(handler=_lazy("modbus_bridge.cli:main_scenarios"))
 
     p = sub.add_parser("regmap", help="print the Modbus register map derived from the application")

@@ -21,6 +21,7 @@ from plc.cli import UserError, read_text_file, writable_file
 from .binding import resolve_zone
 from .client import PlcClient, PlcError
 from .regmap import RegisterMap, RegisterMapError, load_register_map
+from .reset import owner_of
 
 FORMAT = "thermost parameters 1"
 OPERATING_ROLES = ("mode", "setpoint", "manual")
@@ -28,11 +29,6 @@ APPLY_SCANS = 2
 APPLY_WAIT_S = 0.5
 REL_TOLERANCE = 1e-6
 MAX_ZONES = 16
-
-
-def _owner(regmap: RegisterMap, name: str) -> str | None:
-    meta = getattr(regmap[name], "meta", None)
-    return getattr(meta, "owner", None) if meta is not None else None
 
 
 def parameter_names(regmap: RegisterMap) -> list[str]:
@@ -44,7 +40,7 @@ def parameter_names(regmap: RegisterMap) -> list[str]:
         except RegisterMapError:
             continue
         operating |= {binding[r] for r in OPERATING_ROLES if binding.has(r)}
-    names = [n for n, t in regmap.tags.items() if t.writable and _owner(regmap, n) == "client"]
+    names = [n for n, t in regmap.tags.items() if t.writable and owner_of(regmap, n) == "client"]
     if not names:
         raise UserError("the register map has no owner metadata: cannot tell parameters from status")
     return sorted(n for n in names if n not in operating)

@@ -68,13 +68,25 @@ class FactoryState:
         return state
 
 
-def _owner(regmap: RegisterMap, name: str) -> str | None:
-    meta = getattr(regmap[name], "meta", None)
-    return getattr(meta, "owner", None) if meta is not None else None
+def has_metadata(regmap: RegisterMap) -> bool:
+    """True when the application's declarations carry `{owner=...; ...}` metadata (plc/app does; a bare
+    program parses with every default, owner "client", no unit, no group)."""
+    cached = getattr(regmap, "_thermost_has_meta", None)
+    if cached is None:
+        metas = [getattr(t, "meta", None) for t in regmap.tags.values()]
+        cached = any(m is not None and (m.owner != "client" or m.group or m.unit) for m in metas)
+        object.__setattr__(regmap, "_thermost_has_meta", cached)
+    return cached
+
+
+def owner_of(regmap: RegisterMap, name: str) -> str | None:
+    if not has_metadata(regmap):
+        return None
+    return getattr(regmap[name].meta, "owner", None)  # type: ignore[attr-defined]
 
 
 def is_command(regmap: RegisterMap, name: str) -> bool:
-    owner = _owner(regmap, name)
+    owner = owner_of(regmap, name)
     if owner is not None:
         return owner == "command"
     tag = regmap[name]
@@ -85,9 +97,8 @@ def verified_tags(regmap: RegisterMap, factory: FactoryState, scenario: Scenario
                   bindings: Mapping[int, ZoneBinding]) -> list[str]:
     """Parameters checked after the reset: every client-owned tag when the map says who owns what, else
     the controller gains, setpoint, manual value, fuzzy switch and every tag a scenario phase writes."""
-    owners = {name: _owner(regmap, name) for name in factory.values}
-    if any(o is not None for o in owners.values()):
-        return [n for n, o in owners.items() if o == "client"]
+    if has_metadata(regmap):
+        return [n for n in factory.values if owner_of(regmap, n) == "client"]
     names = {b[r] for b in bindings.values() for r in VERIFIED_ROLES if b.has(r)}
     names |= {tag for z in scenario.zones for ph in z.phases for tag in ph.writes}
     return sorted(n for n in names if n in factory.values)
@@ -131,7 +142,7 @@ async def reset_to_known_state(
     restore = {
         n: v
         for n, v in factory.values.items()
-        if n not in fixed and not is_command(regmap, n) and _owner(regmap, n) != "plc"
+        if n not in fixed and not is_command(regmap, n) and owner_of(regmap, n) != "plc"
     }
     pulses = {n: True for n in factory.values if any(rx.fullmatch(n) for rx in PULSED_COILS)}
     check = [n for n in verified_tags(regmap, factory, scenario, bindings) if n not in fixed]

@@ -73,6 +73,13 @@ def main_regmap(args: argparse.Namespace) -> int:
     return 0
 
 
+def command_line() -> str:
+    """The command as the user typed it (for the report)."""
+    import shlex
+
+    return "thermost " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+
+
 def check_out_dir(out_dir: Path) -> None:
     """The report directory: an existing directory or one that can be made (never a file)."""
     existing = next((p for p in (out_dir, *out_dir.parents) if p.exists()), Path("."))
@@ -153,7 +160,7 @@ def main_run(args: argparse.Namespace) -> int:
         raise UserError(str(exc)) from None
     if any(r.interrupted for r, _ in runs):
         stop_reason = next(r.error for r, _ in runs if r.interrupted)
-    written = write_reports(runs, out_dir)
+    written = write_reports(runs, out_dir, command=command_line())
     header, rows = summary_rows(runs)
     print(text_table(header, rows))
     for result, _ in runs:

@@ -11,7 +11,6 @@ Layout under the output directory (default out/<scenario name>/):
 from __future__ import annotations
 
 import csv
-import html
 import json
 import math
 import re
@@ -20,6 +19,8 @@ from pathlib import Path
 from .analysis import PhaseMetrics
 from .loop import RunResult
 from .metrics import json_safe
+from .plots import write_compare, write_plot  # noqa: F401 - write_plot: used by the workers
+from .summary import render_html, render_markdown, summary_blocks
 
 SUMMARY_KEYS = (
     "tuning_duration_s",
@@ -94,45 +95,6 @@ def write_csv(result: RunResult, path: Path) -> None:
                 w.writerow(row)
 
 
-def write_plot(result: RunResult, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    n = len(result.zones)
-    fig, axes = plt.subplots(3, n, figsize=(7 * n, 8), sharex="col", squeeze=False)
-    for j, tr in enumerate(result.zones):
-        ax_t, ax_u, ax_g = axes[0][j], axes[1][j], axes[2][j]
-        ax_t.plot(tr.t, tr.pv, label="PV (measured)", lw=1)
-        ax_t.plot(tr.t, tr.setpoint, label="setpoint", lw=1, ls="--")
-        for rec in tr.phases:
-            ax_t.axvline(rec.t_start, color="grey", lw=0.5)
-            ax_t.annotate(
-                rec.name,
-                (rec.t_start, 1.0),
-                xycoords=("data", "axes fraction"),
-                fontsize=7,
-                va="top",
-                rotation=90,
-            )
-        ax_t.set_ylabel("°C")
-        ax_t.set_title(f"{result.scenario.name} – {tr.name} – {result.variant.name}", fontsize=9)
-        ax_t.legend(fontsize=7)
-        ax_u.plot(tr.t, tr.u, lw=0.8, color="tab:red")
-        ax_u.set_ylabel("output %")
-        for role, values in sorted(tr.gains.items()):
-            if role in ("kp_eff", "kp", "tn_eff", "tn", "tv_eff", "tv"):
-                ax_g.plot(tr.t, values, lw=0.8, label=role)
-        ax_g.set_ylabel("gains (Kp %/°C, Tn/Tv s)")
-        ax_g.set_xlabel("t (s)")
-        if tr.gains:
-            ax_g.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
-
-
 def _fmt(v: object) -> str:
     if v is None:
         return "–"
@@ -175,7 +137,9 @@ def partial_reason(runs: list[tuple[RunResult, list[PhaseMetrics]]]) -> str | No
     return next((f"{r.variant.name}: {r.error}" for r, _ in runs if r.error), None)
 
 
-def write_reports(runs: list[tuple[RunResult, list[PhaseMetrics]]], out_dir: Path) -> dict[str, Path]:
+def write_reports(
+    runs: list[tuple[RunResult, list[PhaseMetrics]]], out_dir: Path, command: str | None = None
+) -> dict[str, Path]:
     out_dir.mkdir(parents=True, exist_ok=True)
     written: dict[str, Path] = {}
     scenario = runs[0][0].scenario
@@ -187,8 +151,10 @@ def write_reports(runs: list[tuple[RunResult, list[PhaseMetrics]]], out_dir: Pat
         "reference": scenario.reference,
         "complete": not partial,
         "partial_reason": partial,
+        "command": command,
         "variants": [],
     }
+    plots: dict[str, str] = {}
     for result, pms in runs:
         tag = slug(result.variant.name)
         csv_path, png_path = out_dir / f"trace_{tag}.csv", out_dir / f"plot_{tag}.png"
@@ -198,6 +164,7 @@ def write_reports(runs: list[tuple[RunResult, list[PhaseMetrics]]], out_dir: Pat
             if result.plot_path is None or Path(result.plot_path) != png_path or not png_path.exists():
                 write_plot(result, png_path)
             written[f"png:{tag}"] = png_path
+            plots[result.variant.name] = png_path.name
         doc["variants"].append(
             {
                 "name": result.variant.name,
@@ -225,42 +192,21 @@ def write_reports(runs: list[tuple[RunResult, list[PhaseMetrics]]], out_dir: Pat
                 ],
             }
         )
+    from .verdict import verdict_rows
+
+    doc["verdict"] = [vars(r) | {"verdict": r.verdict} for r in verdict_rows(runs)]
     metrics_path = out_dir / "metrics.json"
     metrics_path.write_text(json.dumps(doc, indent=2, default=str) + "\n", encoding="utf-8")
     written["metrics"] = metrics_path
+    compare = out_dir / "compare.png"
+    compare_png = compare.name if len(runs) > 1 and write_compare([r for r, _ in runs], compare) else None
+    if compare_png:
+        written["png:compare"] = compare
     header, rows = summary_rows(runs)
-    md = [f"# {scenario.name}", ""]
-    if partial:
-        md += [f"> **PARTIAL REPORT** - the run did not complete ({partial}); the figures below are what "
-               "was measured until then.", ""]
-    md += [scenario.description, ""]
-    if scenario.reference:
-        md += [f"Reference: {scenario.reference}", ""]
-    for result, _ in runs:
-        status = f"error: {result.error}" if result.error else "completed"
-        md.append(
-            f"- **{result.variant.name}**: {status}; {result.plant_time_s:.0f} s of plant time in "
-            f"{result.wall_s:.2f} s wall ({result.steps} steps)"
-        )
-    md += ["", "| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    md += ["| " + " | ".join(r) + " |" for r in rows]
-    md += ["", *[f"![{r.variant.name}](plot_{slug(r.variant.name)}.png)" for r, _ in runs], ""]
-    (out_dir / "summary.md").write_text("\n".join(md), encoding="utf-8")
+    blocks = summary_blocks(runs, header, rows, partial=partial, compare_png=compare_png, command=command,
+                            plots=plots)
+    (out_dir / "summary.md").write_text(render_markdown(blocks), encoding="utf-8")
     written["summary_md"] = out_dir / "summary.md"
-    banner = (f"<p><strong>PARTIAL REPORT</strong> - the run did not complete ({html.escape(partial)}); the "
-              "figures below are what was measured until then.</p>") if partial else ""
-    cells = "".join(f"<th>{html.escape(h)}</th>" for h in header)
-    body = "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in r) + "</tr>" for r in rows)
-    imgs = "".join(
-        f'<p><img src="plot_{slug(r.variant.name)}.png" alt="{html.escape(r.variant.name)}"></p>'
-        for r, _ in runs
-    )
-    page = (
-        f"<!doctype html><html><head><meta charset='utf-8'><title>{html.escape(scenario.name)}</title>"
-        "<style>table{border-collapse:collapse}td,th{border:1px solid #999;padding:2px 6px}</style>"
-        f"</head><body><h1>{html.escape(scenario.name)}</h1>{banner}<p>{html.escape(scenario.description)}</p>"
-        f"<table><tr>{cells}</tr>{body}</table>{imgs}</body></html>\n"
-    )
-    (out_dir / "summary.html").write_text(page, encoding="utf-8")
+    (out_dir / "summary.html").write_text(render_html(blocks, scenario.name), encoding="utf-8")
     written["summary_html"] = out_dir / "summary.html"
     return written

@@ -94,6 +94,20 @@ class Variant:
 
 
 @dataclass
+class Target:
+    """A figure the report judges (scenario `[[target]]`): measured vs paper, pass/fail vs goal."""
+
+    phase: str
+    metric: str
+    zone: str | None = None
+    variant: str | None = None
+    paper: float | None = None
+    goal: float | None = None
+    better: str = "lower"
+    source: str = ""
+
+
+@dataclass
 class Scenario:
     path: Path
     name: str
@@ -108,6 +122,7 @@ class Scenario:
     plant_params: dict[str, Any]
     zones: list[Zone]
     variants: list[Variant]
+    targets: list[Target] = field(default_factory=list)
 
     def build_plant(self) -> Plant:
         return PLANT_MODELS[self.plant_model](**self.plant_params)
@@ -191,6 +206,7 @@ def load_scenario(path: str | Path) -> Scenario:
         plant_params=doc.plant_params(),
         zones=zones,
         variants=variants,
+        targets=[Target(**t.model_dump()) for t in doc.target],
     )
 
 

@@ -213,6 +213,25 @@ class VariantTable(_Strict):
     fuzzy: StrictBool | None = None
 
 
+class TargetTable(_Strict):
+    """A figure the report judges: the measured metric against the reference's (paper) and our goal."""
+
+    phase: StrictStr
+    metric: StrictStr = Field(description="a metric name of metrics.json, e.g. overshoot_pct")
+    zone: StrictStr | None = None
+    variant: StrictStr | None = Field(None, description="only this variant (default: every variant)")
+    paper: Finite | None = None
+    goal: Finite | None = None
+    better: Literal["lower", "higher"] = "lower"
+    source: StrictStr = ""
+
+    @model_validator(mode="after")
+    def _rules(self) -> TargetTable:
+        if self.paper is None and self.goal is None:
+            raise FieldProblem("goal", "give paper, goal or both")
+        return self
+
+
 class ScenarioFile(_Strict):
     """A ThermoST scenario: plant, zones with sensors and phase programmes, controller variants."""
 
@@ -225,6 +244,7 @@ class ScenarioFile(_Strict):
     plant: PlantTable
     zone: list[ZoneTable] = Field(min_length=1)
     variant: list[VariantTable] = Field(default_factory=list)
+    target: list[TargetTable] = Field(default_factory=list)
 
     def plant_params(self) -> dict[str, Any]:
         return self.plant.model_dump(exclude={"model"}, exclude_none=True)

@@ -55,3 +55,40 @@ def test_side_by_side_identical_variants_agree(runs):
     for row in rows:
         assert row[-1] == row[-2], row  # stepped mode is deterministic
     assert "overshoot_pct" in text_table(header, rows)
+
+
+def test_summary_starts_with_the_verdict(tmp_path, runs):
+    import dataclasses
+
+    from modbus_bridge.scenario import Target
+
+    sc = runs[0][0].scenario
+    targets = [Target(phase="step", metric="overshoot_pct", paper=1e9, goal=1e9),  # surely met
+               Target(phase="step", metric="overshoot_pct", paper=0.0, goal=0.0)]  # surely missed
+    judged = [(dataclasses.replace(r, scenario=dataclasses.replace(sc, targets=targets)), m) for r, m in runs]
+    written = write_reports(judged, tmp_path, command="thermost run x.toml")
+    md = written["summary_md"].read_text(encoding="utf-8").splitlines()
+    verdict_at = md.index("## Verdict")
+    assert verdict_at < md.index("## All metrics") and verdict_at <= 4  # right after the title
+    table = [line for line in md[verdict_at:md.index("## Variants compared")] if line.startswith("| PI")]
+    # identification is judged only for plants with known parameters (fopdt: yes) - here the fixture
+    # "tunes" without identifying, so only the two targets per variant are judged
+    assert [line.split("|")[-2].strip() for line in table] == ["pass", "FAIL", "pass", "FAIL"]
+    text = "\n".join(md)
+    assert "`thermost run x.toml`" in text and "tool: thermost" in text and "date: " in text
+    assert "plant: fopdt gain_c_per_pct = 1.0" in text
+    assert written["png:compare"].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    html = written["summary_html"].read_text(encoding="utf-8")
+    assert html.index("Verdict") < html.index("All metrics") and "class='FAIL'" in html
+    doc = json.loads(written["metrics"].read_text(encoding="utf-8"))
+    assert [v["verdict"] for v in doc["verdict"]] == ["pass", "FAIL", "pass", "FAIL"]
+
+
+def test_partial_report_says_so(tmp_path, runs):
+    import dataclasses
+
+    cut = [(dataclasses.replace(runs[0][0], error="interrupted by SIGINT", interrupted=True), runs[0][1])]
+    written = write_reports(cut, tmp_path)
+    md = written["summary_md"].read_text(encoding="utf-8").splitlines()
+    assert md[2].startswith("> **PARTIAL REPORT**") and "interrupted by SIGINT" in md[2]
+    assert json.loads(written["metrics"].read_text(encoding="utf-8"))["complete"] is False

@@ -82,7 +82,8 @@ def params_page(zone: int = 1) -> None:
              "them again and a value it does not take is shown with its reason.").classes("text-caption")
     groups: dict[str, list[str]] = {}
     for name, meta in p.model.meta.items():
-        if meta.zone == z.number and meta.owner == "client" and not p.model.regmap[name].is_bit:
+        if meta.zone == z.number and meta.owner == "client" and not p.model.regmap[name].is_bit and (
+                meta.from_source or meta.group != "status"):  # without metadata: no guessed status rows
             groups.setdefault(meta.group or "other", []).append(name)
     order = [g for g in GROUP_ORDER if g in groups] + sorted(g for g in groups if g not in GROUP_ORDER)
     rows: list[tuple[str, ui.label]] = []

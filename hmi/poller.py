@@ -219,6 +219,8 @@ class Poller:
     async def _write(self, values: dict, level: str, verify: bool) -> WriteResult:
         names = list(values)
         old = {n: self.values.get(n) for n in names}
+        words_before = {z.number: int(self.values.get(z.tags.get("alarm", ""), 0) or 0)
+                        for z in self.model.zones}
         zones = {self.model.meta[n].zone for n in values if n in self.model.meta}
         try:
             async with self.lock:
@@ -251,8 +253,10 @@ class Poller:
                 continue
             zm = self.model.zones[z - 1]
             word = int(shown.get(zm.tags.get("alarm", ""), 0) or 0)
-            if word >> PARAM_ERROR_BIT & 1 and not int(old.get(zm.tags.get("alarm", ""), 0) or 0) >> 16 & 1:
-                err = int(shown.get(zm.tags.get("error", ""), 0) or 0)
+            err = int(shown.get(zm.tags.get("error", ""), 0) or 0)
+            was_set = words_before.get(z, 0) >> PARAM_ERROR_BIT & 1
+            # a latched bit from an earlier refusal stays until acknowledged: then the error id decides
+            if word >> PARAM_ERROR_BIT & 1 and (not was_set or err != 0):
                 problems.append(f"zone {z}: parameter error ({self.error_text.get(err, f'error id {err}')})")
         if problems:
             message = "refused by the PLC: " + "; ".join(problems)

@@ -15,7 +15,7 @@ from .model import GAIN_SET_ROLES, ZoneModel, fmt
 GROUP_TITLES = {
     "pid_heating": "PID heating", "pid_cooling": "PID cooling", "limits": "Output limits and reaction",
     "pwm": "PWM", "setpoint": "Setpoint", "alarms": "Alarms", "tuning": "Tuning", "fuzzy": "Fuzzy adapter",
-    "sensor": "Sensor", "safety": "Safety",
+    "sensor": "Sensor", "safety": "Safety", "cycle": "Cycle times", "mode": "Mode", "process": "Process",
 }
 GROUP_ORDER = tuple(GROUP_TITLES)
 

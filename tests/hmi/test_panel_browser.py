@@ -139,16 +139,20 @@ def test_wrong_password_is_refused(stack: Stack, pg) -> None:
 
 
 def test_plc_refusal_is_shown(stack: Stack, pg) -> None:
-    """A negative Kp passes the page (no range in the page for it) and the PLC refuses it."""
+    """fYMin = 100 is inside its own range (-100 .. 100), so the page lets it through; the PLC refuses it
+    (fYMin must stay below fYMax = 100), keeps the value in use and the page shows why."""
     pg.goto(stack.url + "/params?zone=1")
     login(pg, stack, "engineer", ENGINEER_PASSWORD)
-    pg.get_by_test_id("in-fKpZone1").fill("-3")
+    before = stack.read("fYMinZone1")["fYMinZone1"]
+    pg.get_by_test_id("in-fKpZone1").fill("-3")  # below the tag's minimum: refused in the page
     pg.get_by_test_id("write-fKpZone1").click()
-    expect()(pg.get_by_test_id("msg-fKpZone1")).to_contain_text("refused by the PLC")
+    expect()(pg.get_by_test_id("msg-fKpZone1")).to_contain_text("below the minimum 0")
+    pg.get_by_test_id("group-limits").click()
+    pg.get_by_test_id("in-fYMinZone1").fill("100")
+    pg.get_by_test_id("write-fYMinZone1").click()
+    expect()(pg.get_by_test_id("msg-fYMinZone1")).to_contain_text("refused by the PLC")
+    assert stack.read("fYMinZone1")["fYMinZone1"] == before
     shot(pg, "parameters", docs=True)
-    pg.get_by_test_id("in-fKpZone1").fill("3.7")  # back to a valid value (clears the parameter error)
-    pg.get_by_test_id("write-fKpZone1").click()
-    expect()(pg.get_by_text("accepted by the PLC").first).to_be_visible()
 
 
 GAINS = ("fKpZone1", "fTnZone1", "fTvZone1", "fTdZone1")

@@ -18,9 +18,9 @@ import time
 from collections import deque
 from dataclasses import dataclass, field
 
+from modbus_bridge.alarm_texts import alarm_texts, describe_bits, error_texts
 from modbus_bridge.client import PlcClient, PlcError
 
-from .alarm_texts import alarm_texts, describe_bits, error_texts
 from .model import PanelModel
 from .store import Store
 

@@ -40,7 +40,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("regmap", help="print the Modbus register map derived from the application")
     p.add_argument("--markdown", action="store_true", help="markdown (docs/register-map.md)")
     p.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of stdout")
-    p.set_defaults(handler=_lazy("modbus_bridge.cli:main_regmap"))
+    p.add_argument("--format", choices=("csv", "json", "fuxa", "node-red"),
+                   help="export with metadata: plain CSV/JSON, FUXA device/tag CSV, Node-RED flow")
+    p.add_argument("--plc", default="127.0.0.1:5020", metavar="HOST:PORT",
+                   help="PLC address written into the FUXA / Node-RED export (default 127.0.0.1:5020)")
+    p.set_defaults(handler=_lazy("modbus_bridge.regmap_export:main_regmap_export"))
 
     p = sub.add_parser("simulate", help="a scenario's plant in closed loop with the soft-PLC, live")
     p.add_argument("scenario", nargs="?", help="scenario .toml or shipped name (default: t4_tclab, 2 zones)")

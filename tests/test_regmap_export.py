@@ -77,7 +77,8 @@ def test_node_red_flow_reads_zone_blocks(regmap) -> None:
         covered |= set(json.loads("[" + ",".join(
             line.split("[", 1)[1].split("]", 1)[0] for line in fn["func"].splitlines()
             if line.startswith("out[")) + "]"))
-    zone_tags = {t.name for t in regmap.tags.values() if t.meta.zone is not None and t.table in (HOLDING, COIL)}
+    zone_tags = {t.name for t in regmap.tags.values()
+                 if t.meta.zone is not None and t.table in (HOLDING, COIL)}
     assert covered == zone_tags
     client = next(n for n in flow if n["type"] == "modbus-client")
     assert (client["tcpHost"], client["tcpPort"]) == ("127.0.0.1", "5020")
@@ -97,8 +98,9 @@ def test_node_red_decoder_decodes_openplc_words(regmap) -> None:
         kind = dt.FLOAT32 if t.iec_type == "REAL" else dt.UINT32
         regs = AsyncModbusTcpClient.convert_to_registers(values[t.name], kind, word_order="big")
         words[t.address - start: t.address - start + 2] = regs
-    script = ("const msg = {payload: %s};\nconst f = () => {\n%s\n};\nprocess.stdout.write(JSON.stringify("
-              "f().payload));" % (json.dumps(words), node_red_decoder(tags, start)))
+    script = "\n".join((f"const msg = {{payload: {json.dumps(words)}}};", "const f = () => {",
+                        node_red_decoder(tags, start), "};",
+                        "process.stdout.write(JSON.stringify(f().payload));"))
     out = subprocess.run([node, "-e", script], capture_output=True, text=True, timeout=30, check=True)
     assert json.loads(out.stdout) == values
 

@@ -51,17 +51,18 @@ class LiveFeed:
 
     def preload(self, rows: list[list]) -> None:
         if rows:
-            ui.run_javascript(f"thermost.add({self.chart.id}, {json.dumps(rows)})")
+            ui.run_javascript(f"thermost.add({self.chart.id}, {json.dumps(rows)}, true)")
 
     def push(self) -> None:
         samples = panel().poller.samples
         if not samples or samples[-1].seq <= self.last_seq:
             return
         rows = [_row(s.t, s.values, self.z) for s in samples if s.seq > self.last_seq]
+        backlog = "true" if self.last_seq == 0 else "false"  # the ring buffer on first contact: history
         self.last_seq = samples[-1].seq
         self.sent += len(rows)
         # json.dumps writes NaN / Infinity, which are valid JavaScript expressions
-        ui.run_javascript(f"thermost.add({self.chart.id}, {json.dumps(rows)})")
+        ui.run_javascript(f"thermost.add({self.chart.id}, {json.dumps(rows)}, {backlog})")
 
 
 def _time_axis() -> dict:

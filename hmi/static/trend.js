@@ -9,7 +9,8 @@ window.thermost = (function () {
   function setup(id, cfg) {
     // cfg: {columns: [names], series: [column index per series], state: column or -1, alarm: column or -1,
     //       keep_s: buffer length}
-    if (!charts[id]) charts[id] = {rows: [], paused: false, pending: false, cfg: cfg};
+    if (!charts[id]) charts[id] = {rows: [], paused: false, pending: false, cfg: cfg, lat: [], draws: 0,
+                                   received: 0};
     else charts[id].cfg = cfg;
     return charts[id];
   }
@@ -19,10 +20,13 @@ window.thermost = (function () {
     return el && el.chart ? el.chart : null;
   }
 
-  function add(id, rows) {
+  function add(id, rows, history) {
     const c = charts[id];
     if (!c) return;
-    for (const r of rows) c.rows.push(r);
+    const now = Date.now();  // read time -> arrival here (same machine clock as the server)
+    for (const r of rows) { c.rows.push(r); if (!history) c.lat.push(now - r[0]); }
+    if (!history) c.received += rows.length;
+    if (c.lat.length > 5000) c.lat.splice(0, c.lat.length - 5000);
     const keep = c.cfg.keep_s * 1000;
     if (c.rows.length && c.rows[c.rows.length - 1][0] - c.rows[0][0] > keep) {
       const cut = c.rows[c.rows.length - 1][0] - keep;
@@ -77,6 +81,7 @@ window.thermost = (function () {
       return s;
     });
     chart.setOption({series: series});
+    c.draws += 1;
   }
 
   function pause(id, paused) {
@@ -116,5 +121,11 @@ window.thermost = (function () {
 
   function count(id) { return charts[id] ? charts[id].rows.length : 0; }
 
-  return {setup: setup, add: add, pause: pause, csv: csv, count: count, draw: draw};
+  // figures for `thermost bench`: latencies (ms) since `since` rows were received, redraws, rows
+  function stats(id) {
+    const c = charts[id];
+    return c ? {lat: c.lat.slice(), draws: c.draws, received: c.received} : null;
+  }
+
+  return {setup: setup, add: add, pause: pause, csv: csv, count: count, draw: draw, stats: stats};
 })();

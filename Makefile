@@ -26,6 +26,7 @@ browser:
 	@if [ -x $(CHROMIUM)-headless-shell ] || [ -x $(CHROMIUM) ]; then :; \
 	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
 	  echo "make browser: installing chromium with apt-get"; \
+	  export DEBIAN_FRONTEND=noninteractive; \
 	  { apt-get update -qq && apt-get install -y -qq chromium fonts-liberation >/dev/null \
 	    && { apt-get install -y -qq chromium-headless-shell >/dev/null 2>&1 || true; }; } \
 	  || echo "make browser: apt-get could not install chromium: the browser tests will be skipped"; \

@@ -82,6 +82,7 @@ class Poller:
         self._last_store = 0.0
         self._scan_ref: tuple[float, int] | None = None
         self._task: asyncio.Task | None = None
+        self._slow_due = False  # a zone changed state: read the parameters / identified plant now
         self._stop = asyncio.Event()
 
     # --- life cycle ---------------------------------------------------------------------------------
@@ -107,7 +108,8 @@ class Poller:
         next_t = time.perf_counter()
         while not self._stop.is_set():
             try:
-                if time.perf_counter() >= next_slow:
+                if time.perf_counter() >= next_slow or self._slow_due:
+                    self._slow_due = False
                     await self._read_slow()
                     next_slow = time.perf_counter() + SLOW_EVERY_S
                 await self._read_fast()
@@ -140,6 +142,9 @@ class Poller:
         self.diag.requests_per_cycle = len(self.client._plan(self.fast))
         self.diag.cycles += 1
         self.diag.connected, self.diag.error, self.diag.last_ok = True, "", now
+        states = [z["state"] for z in self.model.zones]
+        if any(values.get(n) != self.values.get(n) for n in states):
+            self._slow_due = True
         self.values.update(values)
         self.seq += 1
         self.samples.append(Sample(self.seq, now, values))

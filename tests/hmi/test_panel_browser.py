@@ -180,7 +180,9 @@ def test_tuning_reject_restores_and_accept_keeps(stack: Stack, pg) -> None:
     pg.get_by_test_id("set-setpoint").click()
     expect()(pg.get_by_text("accepted by the PLC").first).to_be_visible()
     before, after = _tune(stack, pg)
-    expect()(pg.get_by_test_id("tune-ident")).to_contain_text("rule used")
+    ident = pg.get_by_test_id("tune-ident")
+    expect()(ident).not_to_contain_text(re.compile(r"K = 0 degC"))  # seed 003: K 0.59 degC/%
+    assert "rule used: AUTO" not in ident.inner_text()  # the rule AUTO picked
     shot(pg, "tuning", docs=True)
     pg.get_by_test_id("tune-reject").click()
     expect()(pg.get_by_test_id("tune-decided")).to_contain_text("rejected")

@@ -7,6 +7,7 @@ import time
 
 from nicegui import ui
 
+from .fuzzy_tables import OUTPUTS, preset_names, preset_tables
 from .layout import frame, panel, value_text
 from .model import fmt
 from .pages_eng import _when, _zone_select
@@ -34,16 +35,15 @@ def fuzzy_page(zone: int = 1) -> None:
                         ui.label(text).classes("w-32 text-grey-8")
                         labels[role] = ui.label().classes("text-subtitle1").props(f'data-testid="fz-{role}"')
             explain = ui.label().classes("w-96 text-body2").props('data-testid="fz-explain"')
-        heat = ui.echart({
-            "animation": False, "tooltip": {},
-            "grid": {"left": 60, "right": 20, "top": 30, "bottom": 60},
-            "xAxis": {"type": "category", "data": list(SETS), "name": "EC"},
-            "yAxis": {"type": "category", "data": list(SETS), "name": "E"},
-            "visualMap": {"min": 0, "max": 1, "calculable": False, "orient": "horizontal", "left": "center",
-                          "bottom": 0, "inRange": {"color": ["#f5f5f5", "#ff9800", "#d32f2f"]}},
-            "series": [{"type": "heatmap", "data": [[x, y, 0] for x in range(7) for y in range(7)],
-                        "label": {"show": True}}],
-        }).classes("w-96 h-96").props('data-testid="fz-heatmap"')
+        with ui.column():
+            if z.has("fuzzy"):
+                sw = ui.switch("fuzzy adapter on (engineer)", value=bool(p.value(z["fuzzy"]))).props(
+                    'data-testid="fz-switch"')
+                sw.on_value_change(lambda e: _fuzzy_switch(z, sw, bool(e.value)))
+            output = ui.toggle(list(OUTPUTS), value="Kp").props('data-testid="fz-output"')
+            table_note = ui.label().classes("text-caption w-96").props('data-testid="fz-table-note"')
+            heat = _heatmap()
+    state = {"preset": None, "tables": None, "cells": None, "output": None}
     ui.label("Effective (solid) vs base gains over time").classes("text-subtitle1")
     chart = ui.echart({
         "animation": False, "legend": {}, "tooltip": {"trigger": "axis"},
@@ -61,10 +61,8 @@ def fuzzy_page(zone: int = 1) -> None:
     base_cols = {"kp_base": 10, "tn_base": 11}
     # base gains are extra columns appended to each row (the shared trend rows stop at "alarm")
     feed.extra = [z[r] if z.has(r) else None for r in base_cols]
-    last_cells: list = []
 
     def refresh() -> None:
-        nonlocal last_cells
         for role, lab in labels.items():
             lab.set_text(value_text(z[role]))
         cells = []
@@ -75,13 +73,20 @@ def fuzzy_page(zone: int = 1) -> None:
             e_set, ec_set = divmod(int(code), RULE_CODE_BASE)
             if 0 <= e_set < len(SETS) and 0 <= ec_set < len(SETS):
                 cells.append((ec_set, e_set, round(float(strength), 2)))
-        if cells != last_cells:
-            last_cells = cells
-            data = {(x, y): 0.0 for x in range(7) for y in range(7)}
-            for x, y, v in cells:
-                data[(x, y)] = v
-            cells_data = [[x, y, v] for (x, y), v in data.items()]
-            heat.run_chart_method("setOption", {"series": [{"data": cells_data}]})
+        preset = p.value(z["fz_preset"]) if z.has("fz_preset") else None
+        if preset is not None and preset != state["preset"]:
+            state["preset"], state["tables"] = preset, preset_tables(int(preset))
+            name = preset_names().get(int(preset), str(preset))
+            table_note.set_text(
+                f"Rule table of preset {name} (nFuzzyPreset = {int(preset)}) as shipped in st_lib; colour = "
+                "consequent NB (-3) .. PB (3), framed cells fire now (strength as label). A table changed "
+                "through the rule mailbox cannot be read back over Modbus."
+                if state["tables"] else f"preset {name}: rule table not readable from st_lib")
+            state["cells"] = None
+        if cells != state["cells"] or output.value != state["output"]:
+            state["cells"], state["output"] = cells, output.value
+            heat.run_chart_method("setOption", {"series": [{"data": _heat_data(state["tables"], output.value,
+                                                                                cells)}]})
         if cells:
             top = max(cells, key=lambda c: c[2])
             explain.set_text(
@@ -96,6 +101,44 @@ def fuzzy_page(zone: int = 1) -> None:
         _push_with_base(feed)
 
     ui.timer(0.2, refresh)
+
+
+async def _fuzzy_switch(z, sw: ui.switch, on: bool) -> None:
+    from .auth import ENGINEER
+
+    p = panel()
+    if bool(p.value(z["fuzzy"])) == on:
+        return
+    result = await p.write({z["fuzzy"]: on}, ENGINEER, f"fuzzy adapter zone {z.number}")
+    if result is None or not result.ok:
+        sw.set_value(bool(p.value(z["fuzzy"])))
+
+
+def _heatmap() -> ui.echart:
+    return ui.echart({
+        "animation": False, "tooltip": {},
+        "grid": {"left": 60, "right": 20, "top": 30, "bottom": 60},
+        "xAxis": {"type": "category", "data": list(SETS), "name": "EC"},
+        "yAxis": {"type": "category", "data": list(SETS), "name": "E"},
+        "visualMap": {"min": -3, "max": 3, "calculable": False, "orient": "horizontal", "left": "center",
+                      "bottom": 0, "inRange": {"color": ["#1565c0", "#f5f5f5", "#d32f2f"]}},
+        "series": [{"type": "heatmap", "data": [], "label": {"show": True}}],
+    }).classes("w-96 h-96").props('data-testid="fz-heatmap"')
+
+
+def _heat_data(tables: dict | None, output: str, cells: list[tuple[int, int, float]]) -> list:
+    """One item per (EC, E) cell: the consequent as colour, the firing strength framed and labelled."""
+    firing = {(x, y): v for x, y, v in cells}
+    data = []
+    for y in range(len(SETS)):
+        for x in range(len(SETS)):
+            value = tables[output][y][x] if tables else 0
+            item: dict = {"value": [x, y, value]}
+            if (x, y) in firing:
+                item["itemStyle"] = {"borderColor": "#000", "borderWidth": 3}
+                item["label"] = {"formatter": f"{value} @{firing[(x, y)]:.2f}", "fontWeight": "bold"}
+            data.append(item)
+    return data
 
 
 def _push_with_base(feed: LiveFeed) -> None:

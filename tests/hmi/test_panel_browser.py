@@ -245,6 +245,10 @@ def test_trend_streams_and_exports_the_visible_window(stack: Stack, pg) -> None:
 
 def test_fuzzy_and_diagnostics_pages(stack: Stack, pg) -> None:
     pg.goto(stack.url + "/fuzzy?zone=1")
+    login(pg, stack, "engineer", ENGINEER_PASSWORD)
+    pg.get_by_test_id("fz-switch").click()
+    wait_for(lambda: stack.read("bFuzzyZone1")["bFuzzyZone1"], 10, "the fuzzy adapter coil to be on")
+    expect()(pg.get_by_test_id("fz-table-note")).to_contain_text("Rule table of preset")
     expect()(pg.get_by_test_id("fz-explain")).to_contain_text("rule")
     time.sleep(1.0)
     shot(pg, "fuzzy", docs=True)

@@ -148,12 +148,25 @@ class TuneSession:
 SESSIONS: dict[int, TuneSession] = {}
 
 
+def _session(zone: int) -> TuneSession:
+    """This zone's tuning session, from memory or from the database (after a panel restart)."""
+    if zone not in SESSIONS:
+        saved = panel().store.load_tune(zone)
+        SESSIONS[zone] = TuneSession() if saved is None else TuneSession(
+            before=saved[1], started=saved[0], decided=saved[2])
+    return SESSIONS[zone]
+
+
+def _save(zone: int, ses: TuneSession) -> None:
+    SESSIONS[zone] = ses
+    panel().store.save_tune(zone, ses.started, ses.before, ses.decided)
+
+
 @ui.page("/tuning")
 def tuning_page(zone: int = 1) -> None:
     p = panel()
     frame("Self-tuning")
     z = _zone_select(zone, "/tuning")
-    s = SESSIONS.setdefault(z.number, TuneSession())
     gains = [r for r in GAIN_SET_ROLES if z.has(r)]
     with ui.row().classes("items-center"):
         ui.button("Start TUNE", on_click=lambda: start()).props('data-testid="tune-start"')
@@ -175,11 +188,11 @@ def tuning_page(zone: int = 1) -> None:
             return
         result = await p.write({z["mode"]: p.model.codes.modes["TUNE"]}, ENGINEER, f"TUNE zone {z.number}")
         if result is not None and result.ok:
-            SESSIONS[z.number] = TuneSession(before=before, started=time.time())
+            _save(z.number, TuneSession(before=before, started=time.time()))
 
     async def accept() -> None:
-        ses = SESSIONS.get(z.number)
-        if not _tuned(z) or ses is None or not ses.before:
+        ses = _session(z.number)
+        if not _tuned(z) or not ses.before:
             ui.notify("nothing to accept: no tuning finished on this panel", type="warning")
             return
         level = p.level()
@@ -191,19 +204,21 @@ def tuning_page(zone: int = 1) -> None:
         for r in gains:
             p.store.add_audit(level, z[r], ses.before[z[r]], p.value(z[r]), "accepted", "tuned set accepted")
         ses.decided = "accepted"
+        _save(z.number, ses)
         ui.notify("tuned gains accepted", type="positive")
 
     async def reject() -> None:
-        ses = SESSIONS.get(z.number)
-        if ses is None or not ses.before:
+        ses = _session(z.number)
+        if not ses.before:
             ui.notify("nothing to reject: no tuning started on this panel", type="warning")
             return
         result = await p.write(dict(ses.before), ENGINEER, "restore the gains from before TUNE")
         if result is not None and result.ok:
             ses.decided = "rejected: previous gains restored"
+            _save(z.number, ses)
 
     def refresh() -> None:
-        ses = SESSIONS.get(z.number, s)
+        ses = _session(z.number)
         state = p.value(z["state"])
         ts = p.value(z["tune_state"]) if z.has("tune_state") else None
         tname = p.model.tune_states.get(int(ts), str(ts)) if ts is not None else "-"

@@ -7,7 +7,7 @@ import time
 
 from nicegui import ui
 
-from .auth import OPERATOR
+from .auth import ENGINEER, OPERATOR
 from .layout import frame, live_text, number_or_error, panel, value_text
 from .model import MODE_BUTTONS, ZoneModel, fmt
 
@@ -147,7 +147,8 @@ def zone_page(number: str) -> None:
                     sw.on_value_change(lambda e, r=role, s=sw: _switch(z, r, s, e.value))
 
     async def set_mode(mode: str) -> None:
-        await p.write({z["mode"]: p.model.codes.modes[mode]}, OPERATOR, f"mode {mode}")
+        needed = ENGINEER if mode == "TUNE" else OPERATOR  # tuning is the engineer's
+        await p.write({z["mode"]: p.model.codes.modes[mode]}, needed, f"mode {mode}")
 
     def refresh() -> None:
         for role, lab in labels.items():

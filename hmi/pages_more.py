@@ -15,6 +15,7 @@ from .pages_live import TREND_COLUMNS, LiveFeed
 
 SETS = ("NB", "NM", "NS", "ZO", "PS", "PM", "PB")
 RULE_CODE_BASE = 10  # rule code = 10 * E set + EC set (register comment of nFuzzyRule<k>)
+STATUS_GROUPS = ("status", "safety")  # shown on the diagnostics page, whatever registers they hold
 
 
 @ui.page("/fuzzy")
@@ -161,6 +162,12 @@ def diag_page() -> None:
     frame("Diagnostics")
     info = ui.label().classes("text-body1").props('data-testid="diag-info"')
     zones = ui.label().classes("text-body2").props('data-testid="diag-zones"')
+    status_names = [n for n, m in p.model.meta.items()
+                    if m.owner == "plc" and (m.group in STATUS_GROUPS or m.zone is None)]
+    ui.label("Status and safety registers (owner plc)").classes("text-h6")
+    status = ui.table(columns=[{"name": c, "label": c, "field": c, "align": "left"}
+                               for c in ("tag", "value", "description")],
+                      rows=[], row_key="tag").classes("w-full").props('data-testid="diag-status"')
     ui.label("Audit log (every write from the panel)").classes("text-h6")
     audit = ui.table(columns=[{"name": c, "label": c, "field": c, "align": "left"}
                               for c in ("time", "level", "tag", "old", "new", "result", "message")],
@@ -185,6 +192,10 @@ def diag_page() -> None:
             parts.append(f"zone {z.number}: error id {err} ({p.poller.error_text.get(err, '?')}), alarm word "
                          f"{int(p.value(z['alarm']) or 0):#010x}")
         zones.set_text("; ".join(parts))
+        srows = [{"tag": n, "value": value_text(n), "description": p.model.regmap[n].comment}
+                 for n in status_names]
+        if srows != status.rows:
+            status.rows = srows
         rows = [{"key": i, "time": _when(t), "level": lv, "tag": tag, "old": old, "new": new, "result": res,
                  "message": msg} for i, (t, lv, tag, old, new, res, msg) in enumerate(p.store.audit(200))]
         if rows != audit.rows:

@@ -8,6 +8,7 @@ the current second.
 
 from __future__ import annotations
 
+import json
 import sqlite3
 import time
 from dataclasses import dataclass
@@ -23,6 +24,7 @@ CREATE INDEX IF NOT EXISTS alarm_events_t ON alarm_events (t);
 CREATE TABLE IF NOT EXISTS audit (t REAL, level TEXT, tag TEXT, old TEXT, new TEXT, result TEXT,
                                   message TEXT);
 CREATE INDEX IF NOT EXISTS audit_t ON audit (t);
+CREATE TABLE IF NOT EXISTS tune_sessions (zone INTEGER PRIMARY KEY, started REAL, before TEXT, decided TEXT);
 """
 DB_NAME = "hmi.sqlite"
 
@@ -61,6 +63,17 @@ class Store:
         self.db.execute("INSERT INTO audit VALUES (?,?,?,?,?,?,?)",
                         (time.time(), level, tag, repr_value(old), repr_value(new), result, message))
         self.db.commit()
+
+    def save_tune(self, zone: int, started: float, before: dict, decided: str) -> None:
+        """The gain set before the last TUNE of a zone (a reject after a panel restart still restores it)."""
+        self.db.execute("INSERT OR REPLACE INTO tune_sessions VALUES (?,?,?,?)",
+                        (zone, started, json.dumps(before), decided))
+        self.db.commit()
+
+    def load_tune(self, zone: int) -> tuple[float, dict, str] | None:
+        row = self.db.execute("SELECT started, before, decided FROM tune_sessions WHERE zone=?",
+                              (zone,)).fetchone()
+        return None if row is None else (row[0], json.loads(row[1]), row[2])
 
     def samples(self, zone: int, since: float, until: float | None = None) -> list[tuple]:
         return self.db.execute(

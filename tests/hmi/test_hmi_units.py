@@ -50,9 +50,11 @@ def test_store_keeps_history_and_prunes_by_age_and_rows(tmp_path) -> None:
     left = store.samples(1, now - 300)
     assert len(left) == 5 and all(t >= now - 100 for t, *_ in left)
     assert store.audit()[0][2] == "fKpZone1"
+    store.save_tune(1, now, {"fKpZone1": 3.7}, "")
     store.close()
-    reopened = Store(tmp_path)  # history survives a restart
+    reopened = Store(tmp_path)  # history and the gains before TUNE survive a restart
     assert len(reopened.samples(1, now - 300)) == 5
+    assert reopened.load_tune(1) == (now, {"fKpZone1": 3.7}, "") and reopened.load_tune(2) is None
 
 
 def test_alarm_and_error_texts_come_from_the_library_reference() -> None:

@@ -257,6 +257,7 @@ def test_fuzzy_and_diagnostics_pages(stack: Stack, pg) -> None:
     expect()(info).to_contain_text("connected")
     expect()(info).to_contain_text("scans/s")
     expect()(pg.get_by_test_id("audit")).to_contain_text("accepted")
+    expect()(pg.get_by_test_id("diag-status")).to_contain_text("nStateZone1")
     shot(pg, "diagnostics", docs=True)
 
 

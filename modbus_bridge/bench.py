@@ -105,3 +105,12 @@ def run(quick: bool) -> None:
             f"  scenario {name:26s} {wall:6.2f} s wall incl. {startup:.2f} s start-up, "
             f"{plant_s:7.0f} s plant time, {plant_s / wall:6.0f}x real time (first variant){note}"
         )
+    run_panel(quick)
+
+
+def run_panel(quick: bool) -> None:
+    """Operator panel figures (hmi.bench): Modbus requests per poll cycle, poll-to-browser latency,
+    server CPU per tab, trend update rate."""
+    from hmi.bench import run as run_hmi
+
+    run_hmi(quick)

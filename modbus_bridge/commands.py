@@ -50,4 +50,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("regmap", help="print the Modbus register map derived from the application")
     p.add_argument("--markdown", action="store_true", help="markdown (docs/register-map.md)")
     p.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of stdout")
-    p.set_defaults(handler=_lazy("modbus_bridge.cli:main_regmap"))
+    p.add_argument("--format", choices=("csv", "json", "fuxa", "node-red"),
+                   help="export with metadata: plain CSV/JSON, FUXA device/tag CSV, Node-RED flow")
+    p.add_argument("--plc", default="127.0.0.1:5020", metavar="HOST:PORT",
+                   help="PLC address written into the FUXA / Node-RED export (default 127.0.0.1:5020)")
+    p.set_defaults(handler=_lazy("modbus_bridge.regmap_export:main_regmap_export"))
+
+    p = sub.add_parser("simulate", help="a scenario's plant in closed loop with the soft-PLC, live")
+    p.add_argument("scenario", nargs="?", help="scenario .toml or shipped name (default: t4_tclab, 2 zones)")
+    p.add_argument("--port", type=int, default=5020, help="Modbus TCP port of the soft-PLC (default 5020)")
+    p.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1)")
+    p.add_argument("--speed", type=float, default=1.0, metavar="S", help="plant and PLC run S x real time")
+    p.add_argument("--plc", metavar="HOST:PORT", help="run only the plant, against this PLC")
+    p.set_defaults(handler=_lazy("modbus_bridge.simulate:main_simulate"))

@@ -1,0 +1,161 @@
+"""The panel's parts without a browser: access levels, store retention, alarm texts, metadata checks,
+the Modbus poller against the soft-PLC (block reads, write read-back, refusals, audit), simulate's plant."""
+
+from __future__ import annotations
+
+import asyncio
+import math
+import time
+
+import pytest
+
+from hmi.auth import ENGINEER, OPERATOR, Access, AccessConfigError, hash_password, verify_password
+from hmi.model import Meta, load_model
+from hmi.store import Retention, Store
+from modbus_bridge.alarm_texts import alarm_texts, describe_bits, error_texts
+from modbus_bridge.regmap import load_register_map
+
+
+def test_passwords_are_kept_hashed(tmp_path) -> None:
+    h = hash_password("s3cret")
+    assert h.startswith("scrypt$") and "s3cret" not in h
+    assert verify_password("s3cret", h) and not verify_password("wrong", h)
+    assert not verify_password("s3cret", "garbage")
+    access = Access.load(tmp_path, env={"THERMOST_HMI_ENGINEER_PASSWORD": "pw"})
+    assert "pw" not in access.hashes[ENGINEER]
+    assert access.login(ENGINEER, "pw") is None
+    assert access.login(ENGINEER, "nope") == "wrong password"
+    assert access.login(OPERATOR, "") is None  # no operator password configured
+    off = Access.load(tmp_path, env={})
+    assert "engineer level is off" in off.login(ENGINEER, "anything")
+
+
+def test_access_config_file(tmp_path) -> None:
+    (tmp_path / "hmi-access.toml").write_text(f'engineer = "{hash_password("cfg")}"\n')
+    assert Access.load(tmp_path, env={}).login(ENGINEER, "cfg") is None
+    (tmp_path / "hmi-access.toml").write_text('engineer = "plain text"\n')
+    with pytest.raises(AccessConfigError, match="hash"):
+        Access.load(tmp_path, env={})
+
+
+def test_store_keeps_history_and_prunes_by_age_and_rows(tmp_path) -> None:
+    store = Store(tmp_path, Retention(samples_s=100.0, events_s=1000.0, max_rows=5))
+    now = time.time()
+    store.add_samples([(now - 200 + k, 1, 20.0 + k, 30.0, 5.0, 2, 0, 1.0, 2.0, 3.0) for k in range(3)])
+    store.add_samples([(now - 10 + k, 1, 25.0, 30.0, 5.0, 2, 0, 1.0, 2.0, 3.0) for k in range(8)])
+    store.add_audit("engineer", "fKpZone1", 3.7, 2.0, "accepted", "")
+    assert len(store.samples(1, now - 300)) == 11
+    removed = store.prune(now, every_s=0)
+    assert removed >= 6
+    left = store.samples(1, now - 300)
+    assert len(left) == 5 and all(t >= now - 100 for t, *_ in left)
+    assert store.audit()[0][2] == "fKpZone1"
+    store.save_tune(1, now, {"fKpZone1": 3.7}, "")
+    store.close()
+    reopened = Store(tmp_path)  # history and the gains before TUNE survive a restart
+    assert len(reopened.samples(1, now - 300)) == 5
+    assert reopened.load_tune(1) == (now, {"fKpZone1": 3.7}, "") and reopened.load_tune(2) is None
+
+
+def test_alarm_and_error_texts_come_from_the_library_reference() -> None:
+    texts = alarm_texts()
+    assert texts[0].startswith("sensor open") and texts[5] == "heater open" and texts[17] == "tuning error"
+    assert "fTempLowLow" in texts[9]
+    assert describe_bits(1 | 1 << 16, texts) == [(0, texts[0]), (16, "parameter error")]
+    assert "TUNE: timeout" in error_texts()[13]
+
+
+def test_meta_check_refuses_bad_entries() -> None:
+    m = Meta(unit="degC", min=0.0, max=300.0)
+    assert m.check(150.0) is None
+    assert "below the minimum 0" in m.check(-1.0)
+    assert "above the maximum 300" in m.check(301.0)
+    assert m.check(math.nan) == "not a finite number"
+    assert "not one of" in Meta(enum={0: "IDLE", 2: "ACTIVE"}).check(1)
+
+
+def test_model_finds_both_zones_and_reads_in_few_blocks() -> None:
+    from modbus_bridge.client import plan_reads
+
+    model = load_model(load_register_map())
+    assert [z.number for z in model.zones] == [1, 2]
+    spans = plan_reads([model.regmap[n] for n in model.fast_tags()])
+    assert len(spans) <= 8, [(s.table, s.start, s.count) for s in spans]
+
+
+def test_poller_reads_writes_and_audits_against_the_soft_plc(tmp_path) -> None:
+    from hmi.poller import Poller
+    from plc.bundle import bundle_text
+    from plc.runtime.server import SoftPlc
+
+    async def scenario() -> None:
+        model = load_model(load_register_map())
+        store = Store(tmp_path)
+        async with SoftPlc(bundle_text(), port=0) as plc:
+            poller = Poller(model, "127.0.0.1", plc.port, rate_hz=10, store=store)
+            poller.start()
+            for _ in range(50):
+                await asyncio.sleep(0.1)
+                if len(poller.samples) >= 5 and poller.diag.scan_count:
+                    break
+            assert poller.diag.connected and not poller.stale
+            assert poller.diag.requests_per_cycle <= 8
+            ok = await poller.write({"fSetpointZone1": 55.0}, "operator")
+            assert ok.ok, ok.message
+            refused = await poller.write({"fYMinZone1": 100.0}, "engineer")  # fYMin must stay < fYMax
+            assert not refused.ok and "refused by the PLC" in refused.message
+            bad = await poller.write({"nModeZone1": 1e9}, "operator")
+            assert not bad.ok and "not written" in bad.message
+            busy = await asyncio.gather(poller.write({"fSetpointZone1": 60.0}, "operator"),
+                                        poller.write({"fSetpointZone1": 61.0}, "operator"))
+            assert sorted(r.ok for r in busy) == [False, True]  # a double click writes once
+            await poller.stop()
+        results = [row[5] for row in store.audit()]
+        assert results.count("accepted") == 2 and "refused" in results and "failed" in results
+        store.close()
+
+    asyncio.run(scenario())
+
+
+def test_poller_reports_an_unreachable_plc(tmp_path) -> None:
+    from hmi.poller import Poller
+
+    async def scenario() -> None:
+        poller = Poller(load_model(load_register_map()), "127.0.0.1", 1, rate_hz=10)
+        poller.start()
+        await asyncio.sleep(0.5)
+        assert poller.stale and not poller.diag.connected and "cannot connect" in poller.diag.error
+        result = await poller.write({"fSetpointZone1": 50.0}, "operator")
+        assert not result.ok
+        await poller.stop()
+
+    asyncio.run(scenario())
+
+
+def test_simulate_plant_commands() -> None:
+    from modbus_bridge.scenario import load_scenario, resolve_scenario
+    from modbus_bridge.simulate import PlantSim
+
+    sim = PlantSim(load_scenario(resolve_scenario("t4_tclab")), load_register_map())
+    assert [z.plc_zone for z in sim.zones] == [1, 2]
+    assert sim.configuration()["fYMinZone2"] == 0.0  # zone 2's first-phase writes
+    writes = sim.measure(0.5)
+    assert set(writes) == {"fPvZone1", "fPvZone2"}
+    assert "sensor: open" in sim.command("fault 1 open")
+    assert sim.measure(0.5)["fPvZone1"] != pytest.approx(writes["fPvZone1"], abs=5)
+    assert "load: 5" in sim.command("load 2 5")
+    for bad in ("fault 9 open", "fault 1 melted", "load 1 nan", "heater 1 maybe", "bogus", "load 1"):
+        assert sim.command(bad).startswith("error:"), bad
+    sim.apply({"fYZone1": 100.0, "fYZone2": math.nan}, 0.5)
+    assert sim.zones[1].u == 0.0
+
+
+def test_simulate_cli_refuses_bad_input() -> None:
+    from plc.cli import main
+
+    assert main(["simulate", "--speed", "3"]) == 2  # 100 ms is not a multiple of 3
+    assert main(["simulate", "--speed", "0"]) == 2
+    assert main(["simulate", "nope"]) == 2
+    assert main(["simulate", "--plc", "host-without-port"]) == 2
+    assert main(["hmi", "--plc", "x"]) == 2
+    assert main(["hmi", "--rate", "nan"]) == 2

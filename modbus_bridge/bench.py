@@ -37,6 +37,10 @@ def plant_costs(steps: int) -> dict[str, float]:
                 "time_constant2_s": 5.0,
                 "dead_time_s": 2.0,
             }
+        if name == "nlag":
+            kwargs = {"gain_c_per_pct": 1.0, "time_constant_s": 10.0, "order": 3, "dead_time_s": 2.0}
+        if name == "transfer_function":
+            kwargs = {"num": (0.5, 1.0), "den": (200.0, 30.0, 1.0), "dead_time_s": 2.0}
         plant = cls(**kwargs)
         dist = PlantDisturbance.for_channels(plant.channels)
         u = [50.0] * plant.channels

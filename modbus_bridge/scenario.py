@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .plants import PLANT_MODELS, Plant
+from .plants import PLANT_MODELS, Plant, array_fields
 from .sensors import AdcFrontEnd, Sensor
 
 SCENARIO_DIR = Path(__file__).resolve().parent / "scenarios"
@@ -229,6 +229,10 @@ def _must_be_positive(key: str) -> bool:
     )
 
 
+def _is_number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+
+
 def _plant_params(tab: _Table) -> tuple[str, dict[str, Any], Plant]:
     model = tab.get("model", str, choices=tuple(PLANT_MODELS))
     cls = PLANT_MODELS[model]
@@ -239,6 +243,12 @@ def _plant_params(tab: _Table) -> tuple[str, dict[str, Any], Plant]:
             continue
         if key not in fields:
             tab.fail(key, f"unknown key for plant model '{model}' (known: {', '.join(sorted(fields))})")
+        if key in array_fields(model):
+            if not isinstance(value, list) or not value or not all(_is_number(v) for v in value):
+                tab.fail(key, f"must be a non-empty list of finite numbers, got {value!r}")
+            params[key] = tuple(float(v) for v in value)
+            tab.used.add(key)
+            continue
         if isinstance(value, bool) or not isinstance(value, int | float):
             tab.fail(key, f"must be a number, got {value!r}")
         if not math.isfinite(float(value)):

@@ -9,6 +9,8 @@ import argparse
 
 from plc.cli import lazy_handler as _lazy
 
+from .optimise.cli import add_arguments as _optimise_args
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("run", help="run a scenario against the embedded soft-PLC (default) or a PLC")
@@ -41,3 +43,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--markdown", action="store_true", help="markdown (docs/register-map.md)")
     p.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of stdout")
     p.set_defaults(handler=_lazy("modbus_bridge.cli:main_regmap"))
+
+    p = sub.add_parser("optimise", help="Nelder-Mead search of the PID set over closed-loop experiments")
+    _optimise_args(p)
+    p.set_defaults(handler=_lazy("modbus_bridge.optimise.cli:main_optimise"))

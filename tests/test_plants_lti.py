@@ -40,9 +40,7 @@ def test_transfer_function_with_a_zero_matches_partial_fractions():
     den = np.polymul([t1, 1.0], [t2, 1.0])
     y = run(TransferFunctionPlant(num=(a, 1.0), den=tuple(den), ambient_c=0.0), 10.0, 120.0)
     t = DT * np.arange(1, y.size + 1)
-    expected = 10.0 * (
-        1.0 - (t1 - a) / (t1 - t2) * np.exp(-t / t1) - (t2 - a) / (t2 - t1) * np.exp(-t / t2)
-    )
+    expected = 10.0 * (1.0 - (t1 - a) / (t1 - t2) * np.exp(-t / t1) - (t2 - a) / (t2 - t1) * np.exp(-t / t2))
     assert np.max(np.abs(y - expected)) < 1e-9
 
 

@@ -30,11 +30,11 @@ class Executor(Protocol):
     name: str
     workers: int
 
-    def map(self, fn: Callable[[Any], Any], items: Sequence[Any], progress: Progress | None = None) -> list:
-        ...
+    def map(
+        self, fn: Callable[[Any], Any], items: Sequence[Any], progress: Progress | None = None
+    ) -> list: ...
 
-    def close(self) -> None:
-        ...
+    def close(self) -> None: ...
 
 
 class SerialExecutor:
@@ -91,7 +91,7 @@ class LocalExecutor:
 
 
 class DaskExecutor:
-    def __init__(self, address: str, timeout_s: float = 10.0) -> None:
+    def __init__(self, address: str, timeout_s: float = 5.0) -> None:
         try:
             from distributed import Client
         except ImportError as exc:
@@ -131,4 +131,3 @@ def make_executor(scheduler: str | None = None, workers: int | None = None, seri
     if scheduler:
         return DaskExecutor(scheduler)
     return LocalExecutor(workers)
-

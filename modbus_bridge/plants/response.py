@@ -49,7 +49,7 @@ class _Sim:
         self.plant = pm.build(**kwargs)
         self.dist = PlantDisturbance.for_channels(self.plant.channels)
 
-    def run(self, u: Callable[[float], float], u_others: float, seconds: float, t0: float = 0.0) -> np.ndarray:
+    def run(self, u: Callable[[float], float], u_others: float, seconds: float, t0: float = 0.0):
         n = max(1, round(seconds / self.dt))
         out = np.empty(n)
         inputs = [u_others] * self.plant.channels

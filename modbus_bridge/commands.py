@@ -10,6 +10,7 @@ import argparse
 from plc.cli import lazy_handler as _lazy
 
 from .optimise.cli import add_arguments as _optimise_args
+from .scorecard.cli import add_arguments as _scorecard_args
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -47,3 +48,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("optimise", help="Nelder-Mead search of the PID set over closed-loop experiments")
     _optimise_args(p)
     p.set_defaults(handler=_lazy("modbus_bridge.optimise.cli:main_optimise"))
+
+    p = sub.add_parser("scorecard", help="every controller against the physical bound and the best fixed PID")
+    _scorecard_args(p)
+    p.set_defaults(handler=_lazy("modbus_bridge.scorecard.cli:main_scorecard"))

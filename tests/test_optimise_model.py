@@ -70,6 +70,7 @@ def test_simc_and_amigo_follow_the_reference_formulas():
 def test_operating_point_and_fit_of_a_nonlinear_plant():
     sc = load_scenario(resolve_scenario("t6_nonlinear_hotend"))
     assert operating_point(sc) == (150.0, 250.0)
+    assert operating_point(load_scenario(resolve_scenario("seed003_hotend_fuzzy"))) == (160.0, 200.0)
     lm = loop_model(sc)
     # loss k·ΔT^1.35 = P·u: the local gain dΔT/du is ΔT/(1.35·u) at the holding power u
     from modbus_bridge.optimise.robustness import plant_model

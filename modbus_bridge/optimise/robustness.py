@@ -29,20 +29,30 @@ from .experiment import PidGains, last_tune_index
 OMEGA_POINTS = 1500
 
 
-def operating_point(sc: Scenario) -> tuple[float, float]:
-    """(y0, r) of zone 1's first setpoint step after the last TUNE phase (the tune setpoint as both when
-    there is none)."""
+def scored_step(sc: Scenario) -> tuple[int, float, float]:
+    """(phase index, y0, r) of zone 1's scored window: from the first setpoint step between two phases
+    that are not TUNE (a return from the tune setpoint is not the test), else from the end of tuning
+    with y0 = r = the setpoint in force."""
     z = sc.zones[0]
     start = last_tune_index(z.phases)
     sp = z.phases[start].setpoint_c if start >= 0 else None
-    for p in z.phases[start + 1 :]:
-        if p.setpoint_c is not None:
-            if sp is not None and p.setpoint_c != sp and p.ramp_c_per_min is None:
-                return sp, p.setpoint_c
-            sp = p.setpoint_c
+    for i in range(start + 1, len(z.phases)):
+        p = z.phases[i]
+        if p.setpoint_c is None:
+            continue
+        prev_is_tune = i > 0 and z.phases[i - 1].mode == "TUNE"
+        if sp is not None and p.setpoint_c != sp and p.ramp_c_per_min is None and not prev_is_tune:
+            return i, sp, p.setpoint_c
+        sp = p.setpoint_c
     if sp is None:
         raise ValueError(f"{sc.name}: zone 1 has no setpoint")
-    return sp, sp
+    return start + 1, sp, sp
+
+
+def operating_point(sc: Scenario) -> tuple[float, float]:
+    """(y0, r) of the scored setpoint step (y0 = r without one)."""
+    _, y0, r = scored_step(sc)
+    return y0, r
 
 
 def plant_model(sc: Scenario) -> PlantModel:

@@ -2,10 +2,10 @@
 experiment over Modbus (experiment.py) run through the executor (executor.py).
 
 J = cost · (1 + W·(max(0, OS − OS_max)/max(OS_max, 0.5) + max(0, Ms − Ms_max)/Ms_max)), W = 10: the
-overshoot is measured in the experiment, Ms on the true model (robustness.py). Start: AMIGO on the
-FOPDT fit of the true model; initial simplex: seed 004's regular simplex (edge = a factor 2 in each
-parameter), evaluated in parallel. `seed` is the sensor-noise seed of every experiment (the same noise
-for every candidate), so a run is reproducible bit for bit.
+overshoot is measured in the experiment, Ms on the true model (robustness.py). Start: the better
+of AMIGO and SIMC on the FOPDT fit of the true model; initial simplex: seed 004's regular simplex
+(edge = a factor 2 in each parameter), evaluated in parallel. `seed` is the sensor-noise seed of every
+experiment (the same noise for every candidate), so a run is reproducible bit for bit.
 """
 
 from __future__ import annotations
@@ -25,16 +25,16 @@ from .experiment import (
     PidGains,
     cost,
     fixed_gain_scenario,
-    last_tune_index,
     max_overshoot,
     run_experiment,
 )
-from .robustness import LoopModel, amigo, loop_model
+from .robustness import LoopModel, amigo, loop_model, scored_step, simc
 
 PENALTY_WEIGHT = 10.0
 SIMPLEX_EDGE = math.log(2.0)
 FAILED_COST = 1e12
 SETTLE_TIME_CONSTANTS = 4.0
+MIN_TV_S = 1e-3  # log coordinates: a PI set starts at Tv = 1 ms (no D in effect)
 
 
 @dataclass
@@ -93,10 +93,12 @@ class Optimiser:
         self.history: list[Evaluation] = []
         self._cache: dict[tuple, Evaluation] = {}
         self.on_eval: Callable[[Evaluation], None] | None = None
+        self.start_evaluations: dict[str, Evaluation] = {}
 
     def experiment(self, gains: PidGains, label: str = "candidate") -> Experiment:
+        """The closed-loop experiment of one PID set (fixed gains, see experiment.py)."""
         sc = fixed_gain_scenario(self.sc, gains, self.settle_s, seed=self.settings.seed)
-        return Experiment(label, sc, self.settings.plc, last_tune_index(self.sc.zones[0].phases) + 1)
+        return Experiment(label, sc, self.settings.plc, scored_step(self.sc)[0])
 
     def score(self, gains: PidGains, outcome: Outcome) -> Evaluation:
         s = self.settings
@@ -126,22 +128,34 @@ class Optimiser:
                 self.on_eval(ev)
         return [self._cache[self._key(x)] for x in xs]
 
+    def start_candidates(self) -> dict[str, PidGains]:
+        return {"AMIGO (true model)": amigo(self.model.fit), "SIMC (true model)": simc(self.model.fit)}
+
+    @staticmethod
+    def _x(g: PidGains) -> np.ndarray:
+        return np.log([g.kp, g.tn, max(g.tv, MIN_TV_S)])
+
     def run(self) -> Result:
-        start = amigo(self.model.fit)
-        x0 = np.log([start.kp, start.tn, max(start.tv, 1e-3)])
+        """Evaluate the rule-based starts (in parallel), start from the better one, then Nelder-Mead."""
+        starts = self.start_candidates()
+        evs = self.evaluate_many([self._x(g) for g in starts.values()])
+        self.start_evaluations = dict(zip(starts, evs, strict=True))
+        start = min(evs, key=lambda e: e.objective)
+        x0 = self._x(start.gains)
         simplex = seed004_simplex(x0, SIMPLEX_EDGE)
-        self.evaluate_many(list(simplex[: self.settings.evals]))  # in parallel
-        if self.settings.evals > len(simplex):
+        budget = max(0, self.settings.evals - len(self.history))
+        self.evaluate_many(list(simplex[1 : 1 + budget]))  # in parallel
+        if budget > len(simplex) - 1:
             minimize(
                 lambda x: self.evaluate_many([x])[0].objective,
                 x0,
                 method="Nelder-Mead",
                 options={
                     "initial_simplex": simplex,
-                    "maxfev": self.settings.evals,
+                    "maxfev": budget + 1,
                     "xatol": 1e-3,
                     "fatol": 1e-6,
                 },
             )
         best = min(self.history, key=lambda e: e.objective)
-        return Result(best, self.history[0], list(self.history), self.settle_s, best.outcome)
+        return Result(best, start, list(self.history), self.settle_s, best.outcome)

@@ -45,8 +45,11 @@ class PlantModel:
 class _Sim:
     def __init__(self, pm: PlantModel, dt: float, start_c: float | None = None) -> None:
         self.pm, self.dt = pm, dt
-        kwargs = {} if start_c is None else {"initial_c": start_c}
-        self.plant = pm.build(**kwargs)
+        self.plant = pm.build()
+        # the linear kinds are incremental: with initial_c they add the input that holds it to every
+        # command, so their absolute input would be off; only the heat-balance plants start off-ambient
+        if start_c is not None and not hasattr(self.plant, "_u_rest"):
+            self.plant = pm.build(initial_c=start_c)
         self.dist = PlantDisturbance.for_channels(self.plant.channels)
 
     def run(self, u: Callable[[float], float], u_others: float, seconds: float, t0: float = 0.0):

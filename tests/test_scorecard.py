@@ -41,7 +41,9 @@ def _rows(md: str) -> dict[str, list[str]]:
 def test_scorecard_report_on_a_small_scenario(tmp_path, capsys):
     scen = _with_hold(tmp_path)
     doc = tmp_path / "doc.md"
-    doc.write_text("# Doc\n\nprose stays\n\n<!-- figures:scorecard -->\nSTALE-BLOCK\n<!-- /figures:scorecard -->\n")
+    doc.write_text(
+        "# Doc\n\nprose stays\n\n<!-- figures:scorecard -->\nSTALE-BLOCK\n<!-- /figures:scorecard -->\n"
+    )
     out = tmp_path / "out"
     args = ["scorecard", str(scen), "--evals", "4", "-o", str(out), "--markdown", str(doc), "--quiet"]
     assert main([*args, "--workers", "2"]) == 0

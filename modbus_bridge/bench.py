@@ -12,6 +12,8 @@ import sys
 import tempfile
 import time
 
+import numpy as np
+
 from .plants import PLANT_MODELS, PlantDisturbance
 from .scenario import load_scenario, resolve_scenario, shipped_scenarios
 
@@ -37,6 +39,10 @@ def plant_costs(steps: int) -> dict[str, float]:
                 "time_constant2_s": 5.0,
                 "dead_time_s": 2.0,
             }
+        if name == "nlag":
+            kwargs = {"gain_c_per_pct": 1.0, "time_constant_s": 10.0, "order": 3, "dead_time_s": 2.0}
+        if name == "transfer_function":
+            kwargs = {"num": (0.5, 1.0), "den": (200.0, 30.0, 1.0), "dead_time_s": 2.0}
         plant = cls(**kwargs)
         dist = PlantDisturbance.for_channels(plant.channels)
         u = [50.0] * plant.channels
@@ -106,6 +112,7 @@ def run(quick: bool) -> None:
             f"{plant_s:7.0f} s plant time, {plant_s / wall:6.0f}x real time (first variant){note}"
         )
     run_panel(quick)
+    control_quality(quick)
 
 
 def run_panel(quick: bool) -> None:
@@ -114,3 +121,64 @@ def run_panel(quick: bool) -> None:
     from hmi.bench import run as run_hmi
 
     run_hmi(quick)
+
+
+def _experiments_per_second(executor, experiments) -> float:
+    from .optimise.experiment import run_experiment
+
+    t0 = time.perf_counter()
+    executor.map(run_experiment, experiments)
+    return len(experiments) / (time.perf_counter() - t0)
+
+
+def control_quality(quick: bool) -> None:
+    """Scorecard and optimiser figures: the quick scorecard's wall time, and closed-loop optimiser
+    experiments per second on local processes and on a local Dask cluster (2 worker processes)."""
+    from pathlib import Path
+
+    from .optimise.executor import DaskExecutor, LocalExecutor
+    from .optimise.experiment import PidGains
+    from .optimise.search import Optimiser, Settings
+    from .scorecard.build import build_card
+    from .scorecard.cli import QUICK_EVALS, QUICK_SCENARIOS
+
+    print("scorecard and optimiser (modbus_bridge.scorecard, modbus_bridge.optimise):")
+    small = Path(__file__).resolve().parents[1] / "tests" / "harness_fixtures" / "small_fopdt.toml"
+    name = str(small) if quick and small.exists() else QUICK_SCENARIOS[0]
+    sc = load_scenario(resolve_scenario(name))
+    workers = min(2, os.cpu_count() or 1)
+    with LocalExecutor(workers) as ex:
+        t0 = time.perf_counter()
+        card = build_card(sc, ex, QUICK_EVALS)
+        wall = time.perf_counter() - t0
+    label = "small FOPDT fixture (--quick bench)" if quick else f"`thermost scorecard --quick` ({sc.name})"
+    print(
+        f"  scorecard {label}: {wall:.1f} s wall, {len(card.rows)} rows, {QUICK_EVALS} optimiser experiments"
+    )
+    n = 4 if quick else 8
+    opt = Optimiser(sc, Settings(evals=n), ex)
+    exps = [opt.experiment(PidGains(kp, 20.0, 2.0)) for kp in np.linspace(1.0, 4.0, n)]
+    plant_s = opt.settle_s + sum(p.duration_s or 0.0 for p in sc.zones[0].phases if p.mode != "TUNE")
+    with LocalExecutor(workers) as ex:
+        local = _experiments_per_second(ex, exps)
+    try:
+        from distributed import LocalCluster
+    except ImportError:
+        dask = "not measured (the 'distributed' package is not installed: pip install 'thermost[dask]')"
+    else:
+        with (
+            LocalCluster(
+                host="127.0.0.1",
+                n_workers=workers,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=None,
+            ) as cluster,
+            DaskExecutor(cluster.scheduler_address) as ex,
+        ):
+            dask = f"{_experiments_per_second(ex, exps):.2f} experiments/s"
+    print(
+        f"  optimiser experiments ({sc.name}, {plant_s:.0f} s plant time each, {n} experiments, "
+        f"{workers} workers): local processes {local:.2f} experiments/s | Dask LocalCluster {dask} "
+        f"(load average {os.getloadavg()[0]:.1f})"
+    )

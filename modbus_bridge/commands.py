@@ -10,6 +10,9 @@ import argparse
 from plc.cli import lazy_handler as _lazy
 from plc.cli import positive_float
 
+from .optimise.cli import add_arguments as _optimise_args
+from .scorecard.cli import add_arguments as _scorecard_args
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("run", help="run a scenario against the embedded soft-PLC (default) or a PLC")
@@ -63,3 +66,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--speed", type=float, default=1.0, metavar="S", help="plant and PLC run S x real time")
     p.add_argument("--plc", metavar="HOST:PORT", help="run only the plant, against this PLC")
     p.set_defaults(handler=_lazy("modbus_bridge.simulate:main_simulate"))
+
+    p = sub.add_parser("optimise", help="Nelder-Mead search of the PID set over closed-loop experiments")
+    _optimise_args(p)
+    p.set_defaults(handler=_lazy("modbus_bridge.optimise.cli:main_optimise"))
+
+    p = sub.add_parser("scorecard", help="every controller against the physical bound and the best fixed PID")
+    _scorecard_args(p)
+    p.set_defaults(handler=_lazy("modbus_bridge.scorecard.cli:main_scorecard"))

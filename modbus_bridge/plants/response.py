@@ -1,0 +1,264 @@
+"""Offline analysis of a plant model (the "true model" of a scenario): rest input, step response around
+an operating point, frequency response, a two-point FOPDT fit, and the bang-hold bound.
+
+Everything here simulates the plant classes themselves, so it holds for every model the harness runs
+(linear, nonlinear, multi-channel). Nonlinear plants are linearised by a small step around the
+operating point; for the linear kinds `frequency_response` uses the transfer function exactly.
+Multi-channel plants: the other channels hold the same input as the channel under study.
+"""
+
+from __future__ import annotations
+
+import cmath
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import PLANT_MODELS
+from .base import Plant, PlantDisturbance
+from .linear import Fopdt, Sopdt
+from .lti import _LtiPlant
+
+SETTLE_CHUNK_S = 50.0
+MAX_SETTLE_S = 50_000.0
+SETTLED_REL = 1e-6
+SMALL_STEP_PCT = 2.0
+BAND_2PCT = 0.02
+# two-point FOPDT fit (Smith): times at 28.3 % and 63.2 % of the final change
+SMITH_LOW, SMITH_HIGH = 0.283, 0.632
+
+
+@dataclass
+class PlantModel:
+    """A plant kind with its parameters, and the channel under study."""
+
+    model: str
+    params: dict
+    channel: int = 0
+
+    def build(self, **overrides) -> Plant:
+        return PLANT_MODELS[self.model](**{**self.params, **overrides})
+
+
+class _Sim:
+    def __init__(self, pm: PlantModel, dt: float, start_c: float | None = None) -> None:
+        self.pm, self.dt = pm, dt
+        self.plant = pm.build()
+        # the linear kinds are incremental: with initial_c they add the input that holds it to every
+        # command, so their absolute input would be off; only the heat-balance plants start off-ambient
+        if start_c is not None and not hasattr(self.plant, "_u_rest"):
+            self.plant = pm.build(initial_c=start_c)
+        self.dist = PlantDisturbance.for_channels(self.plant.channels)
+
+    def run(self, u: Callable[[float], float], u_others: float, seconds: float, t0: float = 0.0):
+        n = max(1, round(seconds / self.dt))
+        out = np.empty(n)
+        inputs = [u_others] * self.plant.channels
+        c = self.pm.channel
+        for k in range(n):
+            inputs[c] = u(t0 + k * self.dt)
+            self.plant.step(inputs, self.dt, self.dist)
+            out[k] = self.plant.temperatures()[c]
+        return out
+
+
+def _settle(sim: _Sim, u: float) -> float:
+    """Hold every channel at u until the temperature stops moving; returns it."""
+    last = sim.plant.temperatures()[sim.pm.channel]
+    t = 0.0
+    while t < MAX_SETTLE_S:
+        y = sim.run(lambda _t: u, u, SETTLE_CHUNK_S)[-1]
+        t += SETTLE_CHUNK_S
+        if abs(y - last) <= SETTLED_REL * max(1.0, abs(y)):
+            return float(y)
+        last = y
+    return float(last)
+
+
+def steady_temperature(pm: PlantModel, u: float, dt: float = 0.5) -> float:
+    return _settle(_Sim(pm, dt), u)
+
+
+def rest_input(pm: PlantModel, temp_c: float, dt: float = 0.5, tol_c: float = 1e-4) -> float:
+    """The constant input (%) that holds the channel at temp_c (secant on the steady-state map)."""
+    plant = pm.build()
+    lo, hi = plant.u_min_pct, plant.u_max_pct
+    u0, u1 = 0.0 if lo <= 0.0 <= hi else lo, 0.5 * (lo + hi) if hi - lo > 1e-9 else hi
+    if abs(u1 - u0) < 1e-6:
+        u1 = hi
+    y0, y1 = steady_temperature(pm, u0, dt), steady_temperature(pm, u1, dt)
+    for _ in range(30):
+        if abs(y1 - temp_c) < tol_c or y1 == y0:
+            break
+        u2 = u1 + (temp_c - y1) * (u1 - u0) / (y1 - y0)
+        u2 = min(max(u2, lo), hi)
+        u0, y0, u1 = u1, y1, u2
+        y1 = steady_temperature(pm, u1, dt)
+    if abs(y1 - temp_c) > max(0.05, 1e-3 * abs(temp_c)):
+        raise ValueError(f"the plant cannot be held at {temp_c} °C with inputs {lo}..{hi} %")
+    return u1
+
+
+def step_response(
+    pm: PlantModel, temp_c: float, du: float = SMALL_STEP_PCT, dt: float = 0.1, horizon_s: float | None = None
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """(t, dy, u0): response of the channel to a step of du % from rest at temp_c (held by u0)."""
+    u0 = rest_input(pm, temp_c)
+    plant = pm.build()
+    if u0 + du > plant.u_max_pct:
+        du = -du
+    sim = _Sim(pm, dt, start_c=temp_c)
+    base = _settle(sim, u0)
+    if horizon_s is None:  # long enough to settle: keep going until the change stops
+        chunks = [sim.run(lambda _t: u0 + du, u0, SETTLE_CHUNK_S)]
+        while len(chunks) * SETTLE_CHUNK_S < MAX_SETTLE_S:
+            nxt = sim.run(lambda _t: u0 + du, u0, SETTLE_CHUNK_S)
+            chunks.append(nxt)
+            if abs(nxt[-1] - nxt[0]) <= SETTLED_REL * max(1.0, abs(nxt[-1] - base)) * 10:
+                break
+        y = np.concatenate(chunks)
+    else:
+        y = sim.run(lambda _t: u0 + du, u0, horizon_s)
+    t = dt * np.arange(1, y.size + 1)
+    return np.concatenate([[0.0], t]), np.concatenate([[0.0], (y - base) / du]), u0
+
+
+def frequency_response_from_step(t: np.ndarray, s: np.ndarray, omegas: np.ndarray) -> np.ndarray:
+    """G(jw) = ∫ g(t) e^(−jwt) dt with g = ds/dt, s the unit step response sampled at t taken as piecewise
+    linear (each segment integrated exactly), so nothing cancels at high frequency."""
+    slopes = np.diff(s) / np.diff(t)
+    w = np.asarray(omegas)[:, None]
+    e = np.exp(-1j * w * t[None, :])
+    segment = (e[:, :-1] - e[:, 1:]) / (1j * w)
+    return segment @ slopes
+
+
+def exact_frequency_response(plant: Plant, omegas: np.ndarray) -> np.ndarray | None:
+    """The transfer function of the linear kinds, evaluated exactly (None for the others)."""
+    s = 1j * omegas
+    if isinstance(plant, Fopdt):
+        g = plant.true_gain / (plant.true_time_constant * s + 1.0)
+    elif isinstance(plant, Sopdt):
+        sc = plant.time_constant_scale
+        g = plant.gain_c_per_pct * plant.gain_scale
+        g = g / ((plant.time_constant_s * sc * s + 1.0) * (plant.time_constant2_s * sc * s + 1.0))
+    elif isinstance(plant, _LtiPlant):
+        num, den = plant.transfer_function()
+        ss = s * plant.time_constant_scale
+        g = plant.gain_scale * np.polyval(num, ss) / np.polyval(den, ss)
+    else:
+        return None
+    return g * np.exp(-s * plant.dead_time_s)
+
+
+def frequency_response(pm: PlantModel, temp_c: float, omegas: np.ndarray, dt: float = 0.05) -> np.ndarray:
+    exact = exact_frequency_response(pm.build(), omegas)
+    if exact is not None:
+        return exact
+    t, s, _ = step_response(pm, temp_c, dt=dt)
+    return frequency_response_from_step(t, s, omegas)
+
+
+@dataclass
+class FopdtFit:
+    gain: float  # °C per %
+    time_constant_s: float
+    dead_time_s: float
+
+    @property
+    def tau(self) -> float:
+        return self.dead_time_s / (self.dead_time_s + self.time_constant_s)
+
+
+def fit_fopdt(t: np.ndarray, s: np.ndarray) -> FopdtFit:
+    """Two-point (Smith) FOPDT fit of a unit step response: T = 1.5 (t63 − t28), L = t63 − T."""
+    k = float(s[-1])
+    frac = s / k
+
+    def cross(level: float) -> float:
+        i = int(np.argmax(frac >= level))
+        if i == 0:
+            return float(t[0])
+        return float(t[i - 1] + (level - frac[i - 1]) * (t[i] - t[i - 1]) / (frac[i] - frac[i - 1]))
+
+    t28, t63 = cross(SMITH_LOW), cross(SMITH_HIGH)
+    tc = 1.5 * (t63 - t28)
+    return FopdtFit(gain=k, time_constant_s=tc, dead_time_s=max(0.0, t63 - tc))
+
+
+@dataclass
+class BangHold:
+    switch_s: float  # full power until this time after the step, then the holding power
+    settling_s: float  # 2 % settling of the true temperature
+    overshoot_pct: float
+    u_full: float
+    u_hold: float
+    t: np.ndarray
+    y: np.ndarray
+
+
+def _settling(t: np.ndarray, y: np.ndarray, y0: float, r: float) -> float:
+    band = BAND_2PCT * abs(r - y0)
+    outside = np.flatnonzero(np.abs(y - r) > band)
+    if outside.size == 0:
+        return 0.0
+    if outside[-1] == y.size - 1:
+        return math.inf
+    return float(t[outside[-1] + 1])
+
+
+def bang_hold_bound(pm: PlantModel, y0: float, r: float, dt: float, horizon_s: float) -> BangHold:
+    """The fastest 2 % settling an output limited to the actuator range can give from rest at y0 to r:
+    full power (or full cooling), then the holding power, switched at the best time (grid of dt)."""
+    plant = pm.build()
+    u0, ur = rest_input(pm, y0), rest_input(pm, r)
+    u_full = plant.u_max_pct if r > y0 else plant.u_min_pct
+    start = _Sim(pm, dt, start_c=y0)
+    _settle(start, u0)
+
+    def trial(ts: float) -> tuple[float, np.ndarray, np.ndarray]:
+        import copy
+
+        sim = copy.deepcopy(start)
+        y = sim.run(lambda t: u_full if t < ts - 1e-9 else ur, u0, horizon_s)
+        t = dt * np.arange(1, y.size + 1)
+        return _settling(t, y, y0, r), t, y
+
+    # the full-power response crossing r bounds the switch time from above
+    _, t_full, y_full = trial(horizon_s)
+    reach = np.flatnonzero((y_full - r) * math.copysign(1.0, r - y0) >= 0.0)
+    t_max = float(t_full[reach[0]]) if reach.size else horizon_s
+    coarse = np.arange(0.0, t_max + dt, max(dt, t_max / 60.0))
+    scores = [trial(ts)[0] for ts in coarse]
+    best = float(coarse[int(np.argmin(scores))])
+    step = max(dt, t_max / 60.0)
+    fine = np.arange(max(0.0, best - step), best + step + dt / 2, dt)
+    results = [(trial(ts)[0], ts) for ts in fine]
+    settle, ts = min(results)
+    _, t, y = trial(ts)
+    direction = math.copysign(1.0, r - y0)
+    over = max(0.0, float(np.max((y - r) * direction))) / abs(r - y0) * 100.0
+    return BangHold(ts, settle, over, u_full, ur, t, y)
+
+
+def pid_frequency_response(kp: float, tn: float, tv: float, td: float, omegas: np.ndarray) -> np.ndarray:
+    """FB_CtrlPid's form: Kp (1 + 1/(Tn s) + Tv s/(Td s + 1)) (Tn <= 0: no I part)."""
+    s = 1j * omegas
+    c = np.ones_like(s)
+    if tn > 0.0:
+        c = c + 1.0 / (tn * s)
+    if tv > 0.0:
+        c = c + tv * s / (td * s + 1.0)
+    return kp * c
+
+
+def max_sensitivity(loop: np.ndarray) -> float:
+    """Ms = max |1/(1 + L(jw))| over the grid; inf when the loop passes through -1."""
+    den = np.abs(1.0 + loop)
+    return float(np.max(1.0 / np.maximum(den, 1e-12)))
+
+
+def sample_delay(omegas: np.ndarray, seconds: float) -> np.ndarray:
+    return np.array([cmath.exp(-1j * w * seconds) for w in omegas])

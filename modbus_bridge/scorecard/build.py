@@ -1,0 +1,189 @@
+"""The scorecard of one scenario: every controller on the same programme (zone 1 after the last TUNE
+phase), against the bang-hold bound and the best fixed PID the optimiser finds.
+
+Rows: the bound (true model, open loop), best fixed PID (optimise/search.py, IAE with the overshoot and
+Ms limits), SIMC and AMIGO on the true model, and each variant of the scenario as written (the
+project's self-tuned PID, fuzzy PID, ...). Columns: 2 % settling and overshoot of the first scored
+setpoint step, IAE over the scored phases, 2 % recovery after the first load, Ms on the true model, and
+the ratios of settling to the bound and of IAE to the best PID.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..optimise.executor import Executor
+from ..optimise.experiment import (
+    DERIVATIVE_FILTER_RATIO,
+    Experiment,
+    Outcome,
+    PidGains,
+    cost,
+    last_tune_index,
+    run_experiment,
+    variant_scenario,
+)
+from ..optimise.robustness import plant_model, scored_step
+from ..optimise.search import Optimiser, Settings
+from ..plants.response import BangHold, bang_hold_bound
+from ..scenario import Scenario
+
+BOUND_HORIZON_FACTOR = 10.0
+
+
+@dataclass
+class Row:
+    name: str
+    settling_s: float = math.nan
+    overshoot_pct: float = math.nan
+    iae: float = math.nan
+    recovery_s: float = math.nan
+    ms: float = math.nan
+    gains: PidGains | None = None
+    note: str = ""
+    outcome: Outcome | None = None
+    vs_bound: float = math.nan
+    vs_best: float = math.nan
+
+
+@dataclass
+class Card:
+    scenario: Scenario
+    rows: list[Row] = field(default_factory=list)
+    bound: BangHold | None = None
+    step: tuple[float, float] | None = None
+    skipped: str | None = None
+    tau: float = math.nan
+    step_phase: str | None = None  # zone 1's scored phase that makes the setpoint step
+
+
+def applicable(sc: Scenario) -> str | None:
+    """None, or why the scenario has nothing to score."""
+    z = sc.zones[0]
+    start = last_tune_index(z.phases) + 1
+    scored = z.phases[start:]
+    if not scored:
+        return "no phase after tuning in zone 1"
+    loads = {"load_step", "ambient_step", "fan", "filament"}
+    has_load = any(d.kind in loads for p in scored for d in p.disturbances)
+    has_sp = any(p.setpoint_c is not None for p in scored)
+    if not (has_load or has_sp):
+        return "no setpoint change or load after tuning in zone 1 (a fault scenario)"
+    return None
+
+
+def _first(o: Outcome, kind: str, key: str) -> float:
+    for m in o.scored_metrics():
+        if m.kind == kind and key in m.values:
+            v = m.values[key]
+            return float(v) if v is not None else math.nan
+    return math.nan
+
+
+def _tuned_gains(o: Outcome) -> PidGains | None:
+    for m in o.metrics:
+        if m.kind == "tune" and "tuned_kp_pct_per_c" in m.values:
+            tv = float(m.values.get("tuned_tv_s", 0.0))
+            return PidGains(
+                float(m.values["tuned_kp_pct_per_c"]),
+                float(m.values.get("tuned_tn_s", 0.0)),
+                tv,
+                DERIVATIVE_FILTER_RATIO * tv,
+            )
+    return None
+
+
+def _row(name: str, o: Outcome, gains: PidGains | None, ms_of) -> Row:
+    row = Row(name, outcome=o, gains=gains)
+    row.settling_s = _first(o, "step", "settling_time_2pct_s")
+    if math.isnan(row.settling_s) and any(m.kind == "step" for m in o.scored_metrics()):
+        row.settling_s = math.inf  # not inside the band by the end of the phase
+    row.overshoot_pct = _first(o, "step", "overshoot_pct")
+    row.iae = cost(o, "iae")
+    for m in o.scored_metrics():
+        if "recovery_time_2pct_s" in m.values:
+            v = m.values["recovery_time_2pct_s"]
+            row.recovery_s = float(v) if v is not None else math.nan
+            break
+    if gains is not None:
+        row.ms = ms_of(gains)
+    if o.error:
+        row.note = o.error
+    return row
+
+
+def build_card(sc: Scenario, executor: Executor, evals: int) -> Card:
+    card = Card(sc)
+    why = applicable(sc)
+    if why:
+        card.skipped = why
+        return card
+    opt = Optimiser(sc, Settings(cost="iae", evals=evals), executor)
+    fit = opt.model.fit
+    card.tau = fit.tau
+    scored_from, y0, r = scored_step(sc)
+    if y0 != r:
+        card.step = (y0, r)
+        horizon = BOUND_HORIZON_FACTOR * (fit.time_constant_s + fit.dead_time_s)
+        card.bound = bang_hold_bound(plant_model(sc), y0, r, sc.dt_s, horizon)
+    exps = [Experiment(v.name, variant_scenario(sc, i), None, scored_from) for i, v in enumerate(sc.variants)]
+    outcomes = executor.map(run_experiment, exps)
+    best = opt.run()  # evaluates SIMC and AMIGO first
+    rows = []
+    if card.bound is not None:
+        b = card.bound
+        rows.append(
+            Row(
+                "bound (bang-hold, true model)",
+                settling_s=b.settling_s,
+                overshoot_pct=b.overshoot_pct,
+                note=f"100 % for {b.switch_s:.1f} s, then {b.u_hold:.1f} %",
+            )
+        )
+    if best.best.outcome is not None:
+        rows.append(
+            _row(
+                f"best fixed PID ({len(best.history)} experiments)",
+                best.best.outcome,
+                best.best.gains,
+                opt.model.ms,
+            )
+        )
+    for name, ev in opt.start_evaluations.items():
+        if ev.outcome is not None:
+            rows.append(_row(name, ev.outcome, ev.gains, opt.model.ms))
+    for v, o in zip(sc.variants, outcomes, strict=True):
+        row = _row(v.name, o, _tuned_gains(o), opt.model.ms)
+        if v.fuzzy:
+            row.note = (row.note + "; " if row.note else "") + "Ms of the base set (fuzzy gains move)"
+        rows.append(row)
+    best_iae = rows[1].iae if best.best.outcome is not None and len(rows) > 1 else math.nan
+    if card.bound is None:
+        best_iae = rows[0].iae if rows and rows[0].outcome is not None else math.nan
+    for row in rows:
+        if card.bound is not None and not math.isnan(row.settling_s):
+            row.vs_bound = row.settling_s / card.bound.settling_s
+        if row.outcome is not None and math.isfinite(best_iae) and best_iae > 0:
+            row.vs_best = row.iae / best_iae
+    limits = opt.settings
+    for row in rows[1 if card.bound is not None else 0 :]:
+        if row.overshoot_pct > limits.max_overshoot_pct or row.ms > limits.max_ms:
+            note = (
+                f"outside the search limits (overshoot <= {limits.max_overshoot_pct:g} %, "
+                f"Ms <= {limits.max_ms:g})"
+            )
+            row.note = f"{row.note}; {note}" if row.note else note
+    card.rows = rows
+    if card.step is not None:
+        card.step_phase = sc.zones[0].phases[scored_from].name
+    return card
+
+
+def trace_window(o: Outcome, phase: str | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """t from the start of `phase` (or of the scored window), PV and output, from there to the end."""
+    start = next((p[1] for p in o.phases if p[0] == phase), o.scored_start)
+    m = o.t >= start - 1e-9
+    return o.t[m] - start, o.pv[m], o.u[m]

@@ -1,0 +1,81 @@
+"""True-model pieces of the optimiser and scorecard: the bang-hold bound, Ms against python-control,
+SIMC/AMIGO against the formulas of control.md, the numerical frequency response of a nonlinear plant."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from modbus_bridge.optimise.experiment import PidGains
+from modbus_bridge.optimise.robustness import amigo, loop_model, operating_point, simc
+from modbus_bridge.plants.response import (
+    FopdtFit,
+    PlantModel,
+    bang_hold_bound,
+    exact_frequency_response,
+    frequency_response_from_step,
+    step_response,
+)
+from modbus_bridge.scenario import load_scenario, resolve_scenario
+
+SEED003 = PlantModel(
+    "fopdt", {"gain_c_per_pct": 0.5916, "time_constant_s": 23.4, "dead_time_s": 10.6, "ambient_c": 160.0}
+)
+
+
+def test_bang_hold_bound_on_seed003():
+    b = bang_hold_bound(SEED003, 160.0, 200.0, 0.1, 150.0)
+    # full power until the undelayed state is close to 200 °C, then 40/0.5916 = 67.6 % holds it
+    assert b.u_full == 100.0 and b.u_hold == pytest.approx(40.0 / 0.5916, rel=1e-6)
+    # closed form: the band (39.2 °C rise) is entered L + T ln(K·100/(K·100 − 39.2)) after the step
+    k = 0.5916 * 100.0
+    entry = 10.6 + 23.4 * np.log(k / (k - 39.2))
+    assert b.settling_s == pytest.approx(entry, abs=0.11)
+    assert b.overshoot_pct < 2.0
+
+
+def test_numerical_frequency_response_matches_the_transfer_function():
+    t, s, _ = step_response(SEED003, 200.0, dt=0.05)
+    w = np.logspace(-3, 0.5, 40)
+    exact = exact_frequency_response(SEED003.build(), w)
+    assert np.max(np.abs(frequency_response_from_step(t, s, w) - exact) / np.abs(exact)) < 1e-3
+
+
+def test_ms_matches_python_control_on_a_delay_free_loop():
+    control = pytest.importorskip("control", reason="python-control (dev dependency) is the oracle")
+    from modbus_bridge.optimise.robustness import LoopModel
+    from modbus_bridge.plants import NLag
+
+    w = np.logspace(-4, 1, 1500)
+    lm = LoopModel(w, exact_frequency_response(NLag(2.2, 45.0, 4), w), FopdtFit(1, 1, 1), 0.0)
+    s = control.tf("s")
+    plant = control.tf([2.2], list(np.poly1d([45.0, 1.0]) ** 4))
+    c = 1.2 * (1 + 1 / (120.0 * s) + 20.0 * s / (5.0 * s + 1))
+    resp = control.frequency_response(control.feedback(1, c * plant), w)
+    assert lm.ms(PidGains(kp=1.2, tn=120.0, tv=20.0, td=5.0)) == pytest.approx(
+        float(np.max(np.abs(resp.magnitude))), rel=1e-6
+    )
+
+
+def test_simc_and_amigo_follow_the_reference_formulas():
+    fit = FopdtFit(gain=0.5916, time_constant_s=23.4, dead_time_s=10.6)
+    s = simc(fit)
+    assert s.kp == pytest.approx(23.4 / (0.5916 * 21.2)) and s.tn == pytest.approx(23.4) and s.tv == 0.0
+    a = amigo(fit)
+    assert a.kp * 0.5916 == pytest.approx(0.2 + 0.45 * 23.4 / 10.6)
+    assert a.tn == pytest.approx(10.6 * (0.4 * 10.6 + 0.8 * 23.4) / (10.6 + 2.34))
+    assert a.tv == pytest.approx(0.5 * 10.6 * 23.4 / (0.3 * 10.6 + 23.4))
+
+
+def test_operating_point_and_fit_of_a_nonlinear_plant():
+    sc = load_scenario(resolve_scenario("t6_nonlinear_hotend"))
+    assert operating_point(sc) == (150.0, 250.0)
+    assert operating_point(load_scenario(resolve_scenario("seed003_hotend_fuzzy"))) == (160.0, 200.0)
+    lm = loop_model(sc)
+    # loss k·ΔT^1.35 = P·u: the local gain dΔT/du is ΔT/(1.35·u) at the holding power u
+    from modbus_bridge.optimise.robustness import plant_model
+    from modbus_bridge.plants.response import rest_input
+
+    u = rest_input(plant_model(sc), 250.0)
+    assert lm.fit.gain == pytest.approx(225.0 / (1.35 * u), rel=0.03)
+    assert lm.fit.dead_time_s > 5.0  # the 5.5 s input dead time (+ nothing else: one lump)

@@ -1,0 +1,104 @@
+"""`thermost scorecard`: the report's structure and its figures' consistency on a small scenario, bad
+input, and the committed docs/scorecard.md block (structure only: its figures take a long run)."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+from modbus_bridge.scenario import load_scenario, resolve_scenario, shipped_scenarios
+from modbus_bridge.scorecard.build import applicable
+from modbus_bridge.scorecard.report import HEADER
+from plc.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+FIXTURE = ROOT / "tests" / "harness_fixtures" / "small_fopdt.toml"
+HEADER_LINE = "| " + " | ".join(HEADER) + " |"
+
+
+def _with_hold(tmp_path: Path) -> Path:
+    """The small FOPDT scenario with a hold between tuning and the step, so the step is scored."""
+    text = FIXTURE.read_text(encoding="utf-8").replace(
+        '[[zone.phase]]\nname = "step"\nmode = "ACTIVE"',
+        '[[zone.phase]]\nname = "hold"\nmode = "ACTIVE"\nduration_s = 20.0\n\n[[zone.phase]]\nname = "step"',
+    )
+    path = tmp_path / "small_hold.toml"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def _rows(md: str) -> dict[str, list[str]]:
+    rows = {}
+    for line in md.splitlines():
+        if line.startswith("| ") and not line.startswith("| controller"):
+            cells = [c.strip() for c in line.strip("|").split("|")]
+            rows[cells[0]] = cells
+    return rows
+
+
+def test_scorecard_report_on_a_small_scenario(tmp_path, capsys):
+    scen = _with_hold(tmp_path)
+    doc = tmp_path / "doc.md"
+    doc.write_text(
+        "# Doc\n\nprose stays\n\n<!-- figures:scorecard -->\nSTALE-BLOCK\n<!-- /figures:scorecard -->\n"
+    )
+    out = tmp_path / "out"
+    args = ["scorecard", str(scen), "--evals", "4", "-o", str(out), "--markdown", str(doc), "--quiet"]
+    assert main([*args, "--workers", "2"]) == 0
+    md = (out / "scorecard.md").read_text(encoding="utf-8")
+    assert HEADER_LINE in md and "setpoint step 70 → 70" not in md
+    rows = _rows(md)
+    names = list(rows)
+    assert names[0] == "bound (bang-hold, true model)"
+    assert names[1].startswith("best fixed PID (")
+    assert {"SIMC (true model)", "AMIGO (true model)", "as written"} <= set(names)
+    bound = float(rows[names[0]][1])
+    assert 0.0 < bound < 40.0  # the step phase is 40 s long
+    for name, cells in rows.items():
+        settling, ratio = cells[1], cells[6]
+        if settling not in ("–", "not settled") and name != names[0]:
+            assert float(settling) >= bound - 0.1  # nothing beats the bound
+            assert float(ratio) == pytest.approx(float(settling) / bound, abs=0.01)
+    assert rows[names[1]][7] == "1.00"
+    png = out / "scorecard_small_fopdt.png"
+    assert png.stat().st_size > 10_000
+    assert "<table>" in (out / "scorecard.html").read_text(encoding="utf-8")
+    updated = doc.read_text(encoding="utf-8")
+    assert "prose stays" in updated and "STALE-BLOCK" not in updated and HEADER_LINE in updated
+    assert "Produced by `thermost scorecard" in updated
+    assert "best fixed PID" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(("args", "why"), [(["--evals", "3"], "--evals"), (["nosuch"], "no such scenario")])
+def test_bad_input_is_one_line(args, why, capsys):
+    assert main(["scorecard", *args, "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and why in err
+
+
+def test_fault_scenario_is_not_scored():
+    assert "fault" in applicable(load_scenario(resolve_scenario("seed003_sensor_fault")))
+    assert applicable(load_scenario(resolve_scenario("seed003_hotend_fuzzy"))) is None
+
+
+def test_committed_docs_block_has_the_report_structure():
+    text = (ROOT / "docs" / "scorecard.md").read_text(encoding="utf-8")
+    m = re.search(r"<!-- figures:scorecard -->\n(.*?)<!-- /figures:scorecard -->", text, re.DOTALL)
+    assert m, "docs/scorecard.md lost its figures block"
+    block = m.group(1)
+    assert block.startswith("Produced by `thermost scorecard")
+    shipped = {p.stem for p in shipped_scenarios()}
+    sections = re.split(r"^### ", block, flags=re.MULTILINE)[1:]
+    assert sections, "the block has no scenario (regenerate it with the command it names)"
+    for sec in sections:
+        name = sec.splitlines()[0].strip()
+        assert name in shipped
+        if "Not scored:" in sec:
+            continue
+        assert HEADER_LINE in sec
+        rows = _rows(sec)
+        assert any(r.startswith("best fixed PID") for r in rows)
+        if "setpoint step" in sec:
+            assert "bound (bang-hold, true model)" in rows

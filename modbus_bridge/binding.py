@@ -20,6 +20,8 @@ ROLE_PATTERNS: dict[str, tuple[str, ...]] = {
     "pv": (r"fPvZone{n}", r"fXZone{n}", r"fActualZone{n}", r"fPv{n}", r"fX{n}"),
     # raw counts a Modbus client may write (the application's %IW hardware input is read-only)
     "pv_raw": (r"nPvRawModbusZone{n}", r"nPvRawZone{n}", r"nRawZone{n}", r"nAdcZone{n}", r"nRaw{n}"),
+    # heartbeat: the PV writer changes it with every new PV (the PLC's stale-PV watchdog)
+    "pv_seq": (r"nPvSeqZone{n}",),
     "pv_select": (r"bUseRawZone{n}", r"bPvRawZone{n}", r"bRawInputZone{n}"),
     "raw_from_modbus": (r"bRawFromModbusZone{n}",),
     "ntc_r25": (r"fNtcR25Zone{n}",),

@@ -423,6 +423,8 @@ class _LoopCloser:
                 writes[seq.binding["pv_raw"]] = s.last_counts
             else:
                 writes[seq.binding["pv"]] = pv
+            if seq.binding.has("pv_seq"):  # heartbeat with every new PV (stale-PV watchdog)
+                writes[seq.binding["pv_seq"]] = k + 1
         return writes, measured
 
     async def exchange(self, k: int, t: float, writes: dict) -> tuple[dict, list[int]]:

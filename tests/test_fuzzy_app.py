@@ -36,6 +36,7 @@ def plc() -> ScanDriver:
 def close_loop(drv: ScanDriver, plant: Fopdt, seconds: float, log: list | None = None) -> None:
     for _ in range(round(seconds / TS)):
         drv.set("fPvZone1", plant.measure())
+        drv.set("nPvSeqZone1", drv.get("nPvSeqZone1") + 1)  # PV heartbeat
         drv.scan()
         plant.step(drv.get("fYZone1"))
         if log is not None:

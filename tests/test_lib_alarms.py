@@ -78,7 +78,10 @@ def test_nan_x_never_reaches_output(uut: ScanDriver) -> None:
 def test_tolerance_bands_armed_after_reaching_band(uut: ScanDriver) -> None:
     # far below W at start: bands not armed yet
     assert scan(uut, 20.0, n=5) & 0xF00 == 0
-    scan(uut, 49.0)  # inside the first band: armed
+    scan(uut, 49.0, n=5)  # inside the first band, but not long enough: a normal approach
+    assert scan(uut, 44.0) & 0xF00 == 0, "not armed before fBandArmTime in the band"
+    assert scan(uut, 56.0) & 0xF00 == 0, "an overshoot right after entering the band is no warning"
+    scan(uut, 49.0, n=round(30.0 / TS))  # settled inside the first band for fBandArmTime: armed
     assert scan(uut, 44.0) & 0x300 == 0x100      # below W - 5
     assert scan(uut, 39.0) & 0x300 == 0x300      # below W - 10
     assert scan(uut, 56.0) & 0xC00 == 0x400      # above W + 5

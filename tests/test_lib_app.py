@@ -33,8 +33,9 @@ def plc() -> ScanDriver:
 
 
 def close_loop(drv: ScanDriver, plant: Fopdt, seconds: float, zone: int = 1) -> None:
-    for _ in range(round(seconds / TS)):
+    for k in range(round(seconds / TS)):
         drv.set(f"fPvZone{zone}", plant.measure())
+        drv.set(f"nPvSeqZone{zone}", k + 1)  # the PV writer's heartbeat (stale-PV watchdog)
         drv.scan()
         plant.step(drv.get(f"fYZone{zone}"))
 
@@ -76,6 +77,7 @@ def test_register_write_reaches_controller_and_nan_is_rejected(plc: ScanDriver) 
     assert plc.get("sParZone1.fKp") == 7.5
     plc.set("fKpZone1", math.nan)
     plc.set("fPvZone1", 25.0)
+    plc.set("nPvSeqZone1", plc.get("nPvSeqZone1") + 1)  # PV heartbeat
     plc.set("fSetpointZone1", 60.0)
     plc.set("nModeZone1", ACTIVE)
     plc.scan(3)
@@ -95,6 +97,7 @@ def test_tune_through_registers_publishes_parameters(plc: ScanDriver) -> None:
     plc.set("nModeZone1", TUNE)
     for _ in range(round(600 / TS)):
         plc.set("fPvZone1", plant.measure())
+        plc.set("nPvSeqZone1", plc.get("nPvSeqZone1") + 1)  # PV heartbeat
         plc.scan()
         plant.step(plc.get("fYZone1"))
         if plc.get("nTuneStateZone1") in (4, 5):
@@ -132,12 +135,16 @@ def test_raw_inputs_through_sensor_functions(plc: ScanDriver) -> None:
 
 def test_platform_zone_cools_with_negative_output(plc: ScanDriver) -> None:
     plc.set("fPvZone2", 30.0)
+    plc.set("nPvSeqZone2", plc.get("nPvSeqZone2") + 1)  # PV heartbeat
     plc.set("fSetpointZone2", 20.0)
     plc.set("nModeZone2", ACTIVE)
-    plc.scan(30)
+    for _ in range(30):
+        plc.set("nPvSeqZone2", plc.get("nPvSeqZone2") + 1)  # a fresh PV every scan
+        plc.scan()
     assert plc.get("fYZone2") < 0.0
     cool_scans = 0
     for _ in range(40):
+        plc.set("nPvSeqZone2", plc.get("nPvSeqZone2") + 1)
         plc.scan()
         cool_scans += plc.get("bPwmCoolZone2")
     assert cool_scans > 0

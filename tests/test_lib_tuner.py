@@ -87,7 +87,8 @@ def uut() -> ScanDriver:
     drv = ScanDriver(load_test_app(PROGRAM))
     for name, value in (("fTaskCycleTime", TS), ("fCtrlCycleTime", TS), ("fYMin", 0.0), ("fYMax", 100.0),
                         ("fWMax", 1000.0), ("fXMax", 2000.0), ("fTempAbsHigh", 2000.0),
-                        ("fWatchPeriod", 0.0), ("fRunawayPeriod", 0.0), ("fTuneTimeout", 5000.0)):
+                        ("fWatchPeriod", 0.0), ("fRunawayPeriod", 0.0), ("fTuneTimeout", 5000.0),
+                        ("fFrozenTime", 0.0)):  # noise-free sensor: no frozen-PV check
         drv.set(f"sPar.{name}", value)
     return drv
 

@@ -96,9 +96,10 @@ def zone_decls(table: list[dict[str, str]], z: Zone) -> tuple[list[str], list[st
     for r in rows_of(table, z, "md", "mw", "iw", "coil", "fuzzy_md", "fuzzy_coil"):
         loc.append(declaration(r, f"{r['name']}Zone{n}", location(r, z), z))
     params = rows_of(table, z, "md")
+    cfg = [r for r in rows_of(table, z, "coil") if wire(r)[0] == "cfg" and r["default"]]
     defaults = ", ".join(
         f"{wire(r)[1]} := {st_literal(zone_default(r, z), r['type'])}"
-        for r in params if wire(r)[0] == "param"
+        for r in params + cfg if wire(r)[0] in ("param", "cfg")
     )
     synced = [r for r in params if wire(r)[0] == "param"]
     sync_real = [f"fbSync{r['name']}Zone{n}" for r in synced if r["type"] == "REAL"]
@@ -118,6 +119,9 @@ def zone_decls(table: list[dict[str, str]], z: Zone) -> tuple[list[str], list[st
         f"    bFuzzyInitZone{n}, bFuzzyLoadReqZone{n}, bFuzzyOkZone{n} : BOOL;",
         f"    nFuzzyPresetLoadedZone{n} : DINT := -1;",
         f"    fFuzzyTuPrevZone{n} : REAL;",
+        f"    fUnlockRemainZone{n} : REAL;",
+        f"    bWrittenZone{n}, bWrittenPrevZone{n} : BOOL;",
+        f"    bRefInvalidZone{n}, bRefLockedZone{n}, bRefDisableZone{n} : BOOL;",
     ]
     return loc, internal
 
@@ -161,7 +165,19 @@ def status_lines(table: list[dict[str, str]], z: Zone) -> list[str]:
             out.append(f"  {r['name']}Zone{n} := fbZone{n}.{field};")
         elif kind == "inuse":
             out.append(f"  {r['name']}Zone{n} := fbZone{n}.sValid.{field};")
+        elif kind == "cfg":
+            out.append(f"  {r['name']}Zone{n} := fbZone{n}.sValid.{field};")
     return out
+
+
+def written_lines(table: list[dict[str, str]], z: Zone) -> list[str]:
+    """bWrittenZone<n>: a client wrote a synchronised parameter register in this scan."""
+    n = z.n
+    fbs = [f"fbSync{r['name']}Zone{n}.bWritten" for r in rows_of(table, z, "md") if wire(r)[0] == "param"]
+    lines = [f"  bWrittenZone{n} := {fbs[0]}"]
+    lines += [f"    OR {fb}" for fb in fbs[1:]]
+    lines[-1] += ";"
+    return lines
 
 
 def fuzzy_registers(table: list[dict[str, str]], z: Zone, direction: str) -> list[str]:
@@ -185,6 +201,7 @@ def zone_body(table: list[dict[str, str]], z: Zone) -> list[str]:
     fills = {
         "SYNC": sync_lines(table, z),
         "STATUS": status_lines(table, z),
+        "WRITTEN": written_lines(table, z),
         "FUZZY_SHOW": fuzzy_registers(table, z, "show"),
         "FUZZY_APPLY": fuzzy_registers(table, z, "apply"),
         "FUZZY_DEFAULTS": [
@@ -216,6 +233,11 @@ def generate() -> str:
             "    nRawFullScale : INT := 32767;",
             "    fROpenCircuit : REAL := 1.0E9; (* NTC divider: resistance of an open input, ohm *)",
             "    dwParamErrorBit : DWORD := 16#00010000;",
+            "    nUnlockKeyValue : DINT := 16#5AFE; (* engineering unlock key, set at commissioning *)",
+            "    fUnlockTime : REAL := 600.0; (* s an engineering unlock lasts *)",
+            "    nRefusalInvalid : INT := 1;",
+            "    nRefusalLocked : INT := 2;",
+            "    nRefusalDisable : INT := 4;",
             "    fFuzzyEcFilterRatio : REAL := 0.25; (* ec filter time / dead time *)",
             "  END_VAR", "",
             "  bLoadStore := FALSE;",

@@ -89,6 +89,11 @@ def wire(row: dict[str, str]) -> tuple[str, str]:
     return kind, field or row["name"]
 
 
+def sync_block(row: dict[str, str], n: int) -> str:
+    """Instance name of a register's sync block (iec2c crashes on long multi-name FB declarations)."""
+    return f"fbSync{row['name'].lstrip('fdw')}Zone{n}"
+
+
 def zone_decls(table: list[dict[str, str]], z: Zone) -> tuple[list[str], list[str]]:
     """(located declarations, internal declarations) of zone z."""
     n = z.n
@@ -99,11 +104,12 @@ def zone_decls(table: list[dict[str, str]], z: Zone) -> tuple[list[str], list[st
     cfg = [r for r in rows_of(table, z, "coil") if wire(r)[0] == "cfg" and r["default"]]
     defaults = ", ".join(
         f"{wire(r)[1]} := {st_literal(zone_default(r, z), r['type'])}"
-        for r in params + cfg if wire(r)[0] in ("param", "cfg")
+        for r in params + cfg if wire(r)[0] in ("param", "cfg") and r["type"] != "DWORD"
     )
-    synced = [r for r in params if wire(r)[0] == "param"]
-    sync_real = [f"fbSync{r['name']}Zone{n}" for r in synced if r["type"] == "REAL"]
-    sync_dword = [f"fbSync{r['name']}Zone{n}" for r in synced if r["type"] == "DWORD"]
+    sync_blocks = [
+        f"    {sync_block(r, n)} : {'FB_ParamSyncReal' if r['type'] == 'REAL' else 'FB_ParamSyncDword'};"
+        for r in params if wire(r)[0] == "param"
+    ]
     internal = [
         f"    sParZone{n} : ST_ControllerParameter := ({defaults});",
         f"    fbZone{n} : FB_TempController;",
@@ -112,8 +118,7 @@ def zone_decls(table: list[dict[str, str]], z: Zone) -> tuple[list[str], list[st
         f"    bRawOpenZone{n}, bRawShortZone{n} : BOOL;",
         f"    eModeZone{n} : E_CtrlMode := eCTRL_MODE_IDLE;",
         f"    bRejectedZone{n}, bOneRejectZone{n}, bParamRefusedZone{n} : BOOL;",
-        f"    {', '.join(sync_real)} : FB_ParamSyncReal;",
-        f"    {', '.join(sync_dword)} : FB_ParamSyncDword;",
+        *sync_blocks,
         f"    sFuzzyParZone{n} : ST_FuzzyParameter;",
         f"    fbFuzzyZone{n} : FB_FuzzyGainAdapter;",
         f"    bFuzzyInitZone{n}, bFuzzyLoadReqZone{n}, bFuzzyOkZone{n} : BOOL;",
@@ -130,6 +135,9 @@ def zone_init(table: list[dict[str, str]], z: Zone) -> list[str]:
     """First scan: modes off, coils to their defaults; the other client registers only on a blank store."""
     n = z.n
     lines = [f"    nModeZone{n} := 0;"]
+    # MatIEC refuses DWORD values in a structure initialiser: these parameters start here instead
+    lines += [f"    sParZone{n}.{wire(r)[1]} := {st_literal(zone_default(r, z), r['type'])};"
+              for r in rows_of(table, z, "md") if wire(r)[0] == "param" and r["type"] == "DWORD"]
     kept = []
     for r in rows_of(table, z, "md", "mw", "coil"):
         if r["owner"] != "client" or not r["default"] or wire(r)[0] == "param" or r["name"] == "nMode":
@@ -143,7 +151,7 @@ def sync_lines(table: list[dict[str, str]], z: Zone) -> list[str]:
     n, out = z.n, []
     for r in rows_of(table, z, "md", "coil"):
         kind, field = wire(r)
-        reg, fb = f"{r['name']}Zone{n}", f"fbSync{r['name']}Zone{n}"
+        reg, fb = f"{r['name']}Zone{n}", sync_block(r, n)
         if kind == "param" and r["type"] == "REAL":
             out.append(f"  {fb}(bLoad := bLoadStore, fInUse := fbZone{n}.sValid.{field}, fRegister := {reg},"
                        f" fParam := sParZone{n}.{field}, bAnyRefused := bRejectedZone{n});")

@@ -181,7 +181,7 @@ def status_lines(table: list[dict[str, str]], z: Zone) -> list[str]:
 def written_lines(table: list[dict[str, str]], z: Zone) -> list[str]:
     """bWrittenZone<n>: a client wrote a synchronised parameter register in this scan."""
     n = z.n
-    fbs = [f"fbSync{r['name']}Zone{n}.bWritten" for r in rows_of(table, z, "md") if wire(r)[0] == "param"]
+    fbs = [f"{sync_block(r, n)}.bWritten" for r in rows_of(table, z, "md") if wire(r)[0] == "param"]
     lines = [f"  bWrittenZone{n} := {fbs[0]}"]
     lines += [f"    OR {fb}" for fb in fbs[1:]]
     lines[-1] += ";"

@@ -50,6 +50,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", metavar="FILE", help="with --schema: write to FILE")
     p.set_defaults(handler=_lazy("modbus_bridge.cli:main_scenarios"))
 
+    p = sub.add_parser("docs", help="rewrite the generated figure blocks of docs/*.md (make docs)")
+    p.add_argument("--check", action="store_true", help="only report stale blocks (exit 1), write nothing")
+    p.add_argument("--only", action="append", metavar="NAME", help="only this producer (repeatable)")
+    p.add_argument("--skip-measured", action="store_true", help="leave machine-dependent timings alone")
+    p.set_defaults(handler=_lazy("modbus_bridge.docfigures:main_docs"))
+
     p = sub.add_parser("regmap", help="print the Modbus register map derived from the application")
     p.add_argument("--markdown", action="store_true", help="markdown (docs/register-map.md)")
     p.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of stdout")

@@ -140,7 +140,10 @@ def partial_reason(runs: list[tuple[RunResult, list[PhaseMetrics]]]) -> str | No
 def write_reports(
     runs: list[tuple[RunResult, list[PhaseMetrics]]], out_dir: Path, command: str | None = None
 ) -> dict[str, Path]:
+    """Every report file. An interrupted run (SIGINT/SIGTERM: the user wants out now) gets no plots, only
+    the CSV traces, metrics.json and the summaries, marked partial."""
     out_dir.mkdir(parents=True, exist_ok=True)
+    draw = not any(r.interrupted for r, _ in runs)
     written: dict[str, Path] = {}
     scenario = runs[0][0].scenario
     partial = partial_reason(runs)
@@ -160,7 +163,7 @@ def write_reports(
         csv_path, png_path = out_dir / f"trace_{tag}.csv", out_dir / f"plot_{tag}.png"
         write_csv(result, csv_path)
         written[f"csv:{tag}"] = csv_path
-        if any(tr.t for tr in result.zones):
+        if draw and any(tr.t for tr in result.zones):
             if result.plot_path is None or Path(result.plot_path) != png_path or not png_path.exists():
                 write_plot(result, png_path)
             written[f"png:{tag}"] = png_path
@@ -199,7 +202,9 @@ def write_reports(
     metrics_path.write_text(json.dumps(doc, indent=2, default=str) + "\n", encoding="utf-8")
     written["metrics"] = metrics_path
     compare = out_dir / "compare.png"
-    compare_png = compare.name if len(runs) > 1 and write_compare([r for r, _ in runs], compare) else None
+    compare_png = (
+        compare.name if draw and len(runs) > 1 and write_compare([r for r, _ in runs], compare) else None
+    )
     if compare_png:
         written["png:compare"] = compare
     header, rows = summary_rows(runs)

@@ -9,8 +9,10 @@ the first scans of a freshly loaded program. They are taken once from a referenc
 2. every client-writable register and coil back to its factory value (parameters, limits, tuned gains,
    fuzzy registers; self-resetting command coils and registers the PLC owns excepted);
 3. a few scans, then the alarms acknowledged (command coil);
-4. read back: mode and state RESET, alarm word 0, PV as written, every parameter as restored. A PLC that
-   does not get there is retried a few times, then the run is refused with one line naming what differs.
+4. read back: mode and state RESET, alarm word as a fresh program shows it with that PV (0 unless the
+   start temperature is outside a zone's factory limits), PV as written, every parameter as restored.
+   A PLC that does not get there is retried a few times, then the run is refused with one line naming
+   what differs.
 
 Not reachable over Modbus: the identified plant of the last TUNE (Ks/Tu/Tg, owned by the PLC) and what
 the fuzzy adapter derived from it stay until the next TUNE or a restart of the PLC.
@@ -45,6 +47,22 @@ class FactoryState:
     """Client-writable tags of the application with the values a fresh program shows."""
 
     values: dict[str, float | int | bool] = field(default_factory=dict)
+    program: str = ""
+
+    def alarms_at(self, inputs: Mapping[str, float | int], alarm_tags: list[str]) -> dict[str, int]:
+        """The alarm words a freshly loaded program shows with these inputs (mode RESET, PV): what a PLC
+        in its factory state shows too (e.g. a start temperature outside a zone's factory limits)."""
+        from plc.runtime.server import load_program
+
+        app = load_program(self.program, "<reference copy>")
+        located = {v.name: v for v in app.located}
+        for _ in range(RESET_SCANS):
+            app.scan()
+        for name, value in inputs.items():
+            located[name].set(value)
+        for _ in range(2 * RESET_SCANS):
+            app.scan()
+        return {n: int(located[n].get()) for n in alarm_tags if n in located}
 
     @staticmethod
     def of_program(text: str, regmap: RegisterMap, scans: int = RESET_SCANS) -> FactoryState:
@@ -53,7 +71,7 @@ class FactoryState:
         app = load_program(text, "<reference copy>")
         for _ in range(scans):
             app.scan()
-        state = FactoryState()
+        state = FactoryState(program=text)
         for var in app.located:
             tag = regmap.tags.get(var.name)
             if tag is None or not tag.writable:
@@ -148,6 +166,7 @@ async def reset_to_known_state(
     check = [n for n in verified_tags(regmap, factory, scenario, bindings) if n not in fixed]
     status = [b[r] for b in bindings.values() for r in ("state", "alarm") if b.has(r)]
     differs: list[str] = []
+    expected_alarms: dict[str, int] | None = None
     for _attempt in range(ATTEMPTS):
         await client.write_tags(fixed)
         await client.write_tags(restore)
@@ -159,11 +178,16 @@ async def reset_to_known_state(
         differs = [f"{n} = {got[n]!r} (expected {v!r})" for n, v in fixed.items() if not _same(got[n], v)]
         differs += [f"{n} = {got[n]!r} (factory {factory.values[n]!r})" for n in check
                     if not _same(got[n], factory.values[n])]
+        alarms = [b["alarm"] for b in bindings.values() if b.has("alarm")]
+        if any(int(got[a]) for a in alarms) and expected_alarms is None:
+            expected_alarms = factory.alarms_at(fixed, alarms) if factory.program else {}
         for b in bindings.values():
             if int(got[b["state"]]) != codes.states.get("RESET", reset_code):
                 differs.append(f"{b['state']} = {codes.state_name(int(got[b['state']]))} (expected RESET)")
-            if b.has("alarm") and int(got[b["alarm"]]) != 0:
-                differs.append(f"{b['alarm']} = 0x{int(got[b['alarm']]):08X} (expected no alarm)")
+            expected = (expected_alarms or {}).get(b["alarm"], 0) if b.has("alarm") else 0
+            if b.has("alarm") and int(got[b["alarm"]]) != expected:
+                word = int(got[b["alarm"]])
+                differs.append(f"{b['alarm']} = 0x{word:08X} (a fresh PLC shows 0x{expected:08X})")
         if not differs:
             return
     raise PlcError(

@@ -76,6 +76,8 @@ def summary_blocks(runs: list[tuple[RunResult, list[PhaseMetrics]]], metrics_hea
                                  "of a plant with known parameters)."))
     if compare_png:
         blocks += [Block("h2", "Variants compared"), Block("img", compare_png)]
+    elif any(r.interrupted for r, _ in runs):
+        blocks.append(Block("p", "No plots: the run was interrupted; the CSV traces hold every sample."))
     made = [
         f"command: `{command}`" if command else "command: (library call)",
         f"tool: {tool_version()}",

@@ -24,7 +24,7 @@ from .loop import ProgressFn, RunResult
 from .runner import HarnessSetup, ProgressFor, run_variants
 from .scenario import Scenario
 
-STOP_GRACE_S = 1.5  # after a stop request, workers have this long to hand in their partial trace
+STOP_GRACE_S = 1.0  # after a stop request, workers have this long to hand in their partial trace
 POLL_S = 0.2
 SIGNAL_NAMES = {signal.SIGINT: "SIGINT", signal.SIGTERM: "SIGTERM"}
 

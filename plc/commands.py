@@ -22,6 +22,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1)")
     p.add_argument("--port", type=port_number, default=5020, help="Modbus TCP port (default 5020; 0: any)")
     p.add_argument("--stepped", action="store_true", help="PLC time advances only when a client asks")
+    p.add_argument("-v", "--verbose", action="store_true", help="log lines of the Modbus library too")
     p.add_argument("--persist", metavar="FILE",
                    help="OpenPLC's persistent storage: keep %%MW/%%MD/%%ML in FILE across restarts")
     p.add_argument("--persist-period", type=positive_float, default=10.0, metavar="S",

@@ -10,6 +10,7 @@ import re
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -37,18 +38,33 @@ def children_of(pid: int) -> list[int]:
     return found
 
 
-def wait_for_progress(proc: subprocess.Popen, out: Path, timeout_s: float = 60.0) -> list[int]:
-    """Until the run has started its workers (the output folder exists once the plots are drawn in
-    parallel; the worker processes show up as children)."""
+class StderrLines:
+    """Collects a process' stderr lines in a thread (the progress lines tell when a run is running)."""
+
+    def __init__(self, proc: subprocess.Popen) -> None:
+        self.lines: list[str] = []
+        self._thread = threading.Thread(target=self._read, args=(proc,), daemon=True)
+        self._thread.start()
+
+    def _read(self, proc: subprocess.Popen) -> None:
+        for line in proc.stderr:  # type: ignore[union-attr]
+            self.lines.append(line)
+
+    def text(self) -> str:
+        self._thread.join(timeout=5)
+        return "".join(self.lines)
+
+
+def wait_for_progress(proc: subprocess.Popen, err: StderrLines, timeout_s: float = 120.0) -> None:
+    """Until every variant reported plant time (plain progress lines: stderr is not a terminal)."""
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
-        kids = children_of(proc.pid)
-        if len(kids) >= 2:
-            time.sleep(1.0)  # the workers are running their scenario
-            return children_of(proc.pid)
-        assert proc.poll() is None, proc.communicate()
+        if sum("s plant time" in line for line in err.lines) >= 2:
+            time.sleep(0.5)  # the workers are running their scenario
+            return
+        assert proc.poll() is None, err.text()
         time.sleep(0.05)
-    pytest.fail("the run did not start its worker processes")
+    pytest.fail("the run reported no progress")
 
 
 def assert_partial_report(out: Path) -> None:
@@ -64,15 +80,19 @@ def assert_partial_report(out: Path) -> None:
 def test_signal_ends_run_and_workers_with_partial_report(tmp_path, sig):
     out = tmp_path / "report"
     proc = thermost("run", "--out", str(out))
-    workers = wait_for_progress(proc, out)
+    lines = StderrLines(proc)
+    wait_for_progress(proc, lines)
+    workers = children_of(proc.pid)
+    assert len(workers) >= 2, workers
     t0 = time.monotonic()
     proc.send_signal(sig)
     try:
-        _, err = proc.communicate(timeout=30)
+        proc.wait(timeout=30)
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
     took = time.monotonic() - t0
+    err = lines.text()
     assert took <= STOP_LIMIT_S, f"ended {took:.2f} s after {sig.name}"
     assert proc.returncode == 130, (proc.returncode, err)
     assert "Traceback" not in err, err
@@ -91,10 +111,15 @@ def test_plc_lost_mid_run_gives_exit_1_and_a_partial_report(tmp_path):
         port = int(re.search(r":(\d+) ", line).group(1))
         out = tmp_path / "report"
         run = thermost("run", "--plc", f"127.0.0.1:{port}", "--out", str(out))
-        time.sleep(2.5)  # the first variant is running (about 3 s of wall time when nothing is lost)
-        assert run.poll() is None, run.communicate()
+        lines = StderrLines(run)
+        deadline = time.monotonic() + 120
+        while not any("s plant time" in line for line in lines.lines) and time.monotonic() < deadline:
+            assert run.poll() is None, lines.text()
+            time.sleep(0.05)
+        time.sleep(0.3)  # the first variant is running
         plc.kill()
-        _, err = run.communicate(timeout=60)
+        run.wait(timeout=60)
+        err = lines.text()
     finally:
         for p in (plc, locals().get("run")):
             if p is not None and p.poll() is None:

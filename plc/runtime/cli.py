@@ -22,10 +22,16 @@ NS_PER_MS = 1e6
 BUNDLE_NAME = "<thermost bundle>"
 
 
-def configure_logging() -> None:
+LIBRARY_LOGGERS = ("pymodbus", "asyncio")
+
+
+def configure_logging(verbose: bool = False) -> None:
+    """Our own INFO lines; the Modbus library's log lines only with -v."""
     logging.basicConfig(
         level=logging.INFO, stream=sys.stderr, format="thermost plc: %(levelname)s %(message)s"
     )
+    for name in LIBRARY_LOGGERS:
+        logging.getLogger(name).setLevel(logging.DEBUG if verbose else logging.CRITICAL)
 
 
 def load_for_cli(file: str | None) -> ApplicationLike:
@@ -110,7 +116,7 @@ async def serve(
 
 
 def main_plc(args: argparse.Namespace) -> int:
-    configure_logging()
+    configure_logging(getattr(args, "verbose", False))
     app = load_for_cli(args.file)
     persist = getattr(args, "persist", None)
     if persist is not None:

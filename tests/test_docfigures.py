@@ -1,0 +1,50 @@
+"""Docs derive their figures: every `<!-- figures:NAME -->` block of docs/*.md names a registered producer,
+and every block whose figures do not depend on the machine is exactly what its producer returns today
+(the seed 003 block re-runs the default scenario, stepped, about 5 s). Stale: run `make docs`."""
+
+from __future__ import annotations
+
+import pytest
+
+from modbus_bridge import docfigures
+
+
+def all_blocks() -> list[tuple[str, str, str]]:
+    out = []
+    for page in docfigures.pages():
+        for name, body in docfigures.blocks(page.read_text(encoding="utf-8")):
+            out.append((page.name, name, body))
+    return out
+
+
+def test_every_block_has_a_producer():
+    found = all_blocks()
+    assert found, "no figures blocks in docs/"
+    for page, name, _ in found:
+        assert name in docfigures.PRODUCERS, f"{page}: figures:{name} has no producer"
+
+
+@pytest.mark.parametrize(
+    ("page", "name", "body"),
+    [b for b in all_blocks() if b[1] not in docfigures.MEASURED],
+    ids=[f"{b[0]}:{b[1]}" for b in all_blocks() if b[1] not in docfigures.MEASURED],
+)
+def test_block_is_current(page, name, body):
+    assert body == docfigures.PRODUCERS[name]().rstrip("\n") + "\n", (
+        f"docs/{page}: figures:{name} disagrees with the code: run `make docs`"
+    )
+
+
+def test_measured_blocks_are_filled():
+    for page, name, body in all_blocks():
+        if name in docfigures.MEASURED:
+            assert body.strip(), f"docs/{page}: figures:{name} was never generated: run `make docs`"
+
+
+def test_render_replaces_only_the_block(monkeypatch):
+    monkeypatch.setitem(docfigures.PRODUCERS, "demo", lambda: "- figure 42\n")
+    page = "intro\n<!-- figures:demo -->\n- figure 41 (stale)\n<!-- /figures:demo -->\noutro\n"
+    expected = "intro\n<!-- figures:demo -->\n- figure 42\n<!-- /figures:demo -->\noutro\n"
+    assert docfigures.render(page) == expected
+    with pytest.raises(KeyError, match="no producer"):
+        docfigures.render("<!-- figures:nobody -->\n<!-- /figures:nobody -->\n")

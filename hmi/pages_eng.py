@@ -109,8 +109,12 @@ def _param_row(name: str) -> ui.label:
             ui.label(name).classes("text-weight-medium")
             ui.label(tag.comment).classes("text-caption text-grey-7")
         current = ui.label().classes("w-28").props(f'data-testid="val-{name}"')
-        bounded = meta.min is not None or meta.max is not None
-        rng = f"{fmt(meta.min)} … {fmt(meta.max)}" if bounded else "no range"
+        if meta.min is not None and meta.max is not None:
+            rng = f"{fmt(meta.min)} … {fmt(meta.max)}"
+        elif meta.min is not None or meta.max is not None:
+            rng = f"≥ {fmt(meta.min)}" if meta.min is not None else f"≤ {fmt(meta.max)}"
+        else:
+            rng = "no range"
         ui.label(f"{rng} {meta.unit}; default {fmt(meta.default)}").classes("w-56 text-caption")
         box = ui.input().props(f'dense data-testid="in-{name}"').classes("w-32")
         msg = ui.label().classes("text-negative text-caption").props(f'data-testid="msg-{name}"')

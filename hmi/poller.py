@@ -262,7 +262,8 @@ class Poller:
             was_set = words_before.get(z, 0) >> PARAM_ERROR_BIT & 1
             # a latched bit from an earlier refusal stays until acknowledged: then the error id decides
             if word >> PARAM_ERROR_BIT & 1 and (not was_set or err != 0):
-                problems.append(f"zone {z}: parameter error ({self.error_text.get(err, f'error id {err}')})")
+                why = self.error_text.get(err, f"error id {err}") if err else f"alarm bit {PARAM_ERROR_BIT}"
+                problems.append(f"zone {z}: parameter error ({why})")
         if problems:
             message = "refused by the PLC: " + "; ".join(problems)
             self._audit(level, values, old, "refused", message)

@@ -159,3 +159,32 @@ def test_simulate_cli_refuses_bad_input() -> None:
     assert main(["simulate", "--plc", "host-without-port"]) == 2
     assert main(["hmi", "--plc", "x"]) == 2
     assert main(["hmi", "--rate", "nan"]) == 2
+
+
+def test_simulate_plant_writes_pv_over_modbus_to_a_plc(tmp_path) -> None:
+    """The plant side alone (as with --plc HOST:PORT) against a real-time soft-PLC at 10 x."""
+    from modbus_bridge.client import PlcClient
+    from modbus_bridge.scenario import load_scenario, resolve_scenario
+    from modbus_bridge.simulate import PlantSim, Simulation
+    from plc.bundle import bundle_text, with_speed
+    from plc.runtime.server import SoftPlc
+
+    async def scenario() -> None:
+        rm = load_register_map()
+        async with SoftPlc(with_speed(bundle_text(), 10), port=0) as plc:
+            sim = PlantSim(load_scenario(resolve_scenario("seed003_hotend_fuzzy")), rm)
+            runner = Simulation(sim, "127.0.0.1", plc.port, 10.0, log=lambda _s: None)
+            stop = asyncio.Event()
+            task = asyncio.create_task(runner.run(stop))
+            async with PlcClient("127.0.0.1", plc.port, rm) as c:
+                await asyncio.sleep(0.5)
+                await c.write_tags({"nModeZone1": 4, "fYManualZone1": 50.0})  # MANUAL 50 %
+                await asyncio.sleep(2.5)  # 25 s of plant time: past the 10.6 s dead time
+                v = await c.read_tags(["fPvZone1", "fYZone1"])
+            stop.set()
+            await task
+        assert runner.steps > 100 and runner.connected
+        assert v["fYZone1"] == pytest.approx(50.0)
+        assert v["fPvZone1"] > 162.0  # the plant (160 degC at rest) heats with the PLC's output
+
+    asyncio.run(scenario())

@@ -75,6 +75,8 @@ def test_overview_shows_live_pv(stack: Stack, pg) -> None:
         stack.sim_command("load 1 0")
     time.sleep(1.5)  # sparklines fill
     shot(pg, "overview", docs=True)
+    pg.get_by_test_id("card-2").click()
+    expect()(pg).to_have_url(re.compile(r"/zone/2$"))
 
 
 def test_viewer_cannot_write(stack: Stack, pg) -> None:

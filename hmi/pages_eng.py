@@ -87,17 +87,29 @@ def params_page(zone: int = 1) -> None:
             groups.setdefault(meta.group or "other", []).append(name)
     order = [g for g in GROUP_ORDER if g in groups] + sorted(g for g in groups if g not in GROUP_ORDER)
     rows: list[tuple[str, ui.label]] = []
-    for g in order:
-        with ui.expansion(GROUP_TITLES.get(g, g.replace("_", " ")), value=g in ("pid_heating", "setpoint")
-                          ).classes("w-full").props(f'data-testid="group-{g}"'):
-            for name in groups[g]:
-                rows.append((name, _param_row(name)))
+    built: set[str] = set()
 
     def refresh() -> None:
         for name, lab in rows:
             lab.set_text(value_text(name))
 
-    refresh()
+    def build(g: str, exp: ui.expansion) -> None:
+        """A group's rows are made when it is first opened (a page of every parameter is slow)."""
+        if g in built:
+            return
+        built.add(g)
+        with exp:
+            for name in groups[g]:
+                rows.append((name, _param_row(name)))
+        refresh()
+
+    for g in order:
+        exp = ui.expansion(GROUP_TITLES.get(g, g.replace("_", " "))).classes("w-full").props(
+            f'data-testid="group-{g}"')
+        exp.on_value_change(lambda e, g=g, exp=exp: build(g, exp) if e.value else None)
+        if g in ("pid_heating", "setpoint"):
+            exp.set_value(True)
+
     ui.timer(1.0, refresh)
 
 

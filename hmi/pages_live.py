@@ -62,7 +62,13 @@ class LiveFeed:
         self.last_seq = samples[-1].seq
         self.sent += len(rows)
         # json.dumps writes NaN / Infinity, which are valid JavaScript expressions
-        ui.run_javascript(f"thermost.add({self.chart.id}, {json.dumps(rows)}, {backlog})")
+        self.chart.client.run_javascript(f"thermost.add({self.chart.id}, {json.dumps(rows)}, {backlog})")
+
+    def follow(self) -> None:
+        """Push each sample as soon as the poller has it (no page-timer wait), until the page goes."""
+        listeners = panel().poller.listeners
+        listeners.add(self.push)
+        self.chart.client.on_delete(lambda: listeners.discard(self.push))
 
 
 def _time_axis() -> dict:
@@ -276,8 +282,6 @@ def trend_page(zone: int = 1) -> None:
     pause.on_value_change(
         lambda e: ui.run_javascript(f"thermost.pause({chart.id}, {json.dumps(bool(e.value))})"))
 
-    def refresh() -> None:
-        feed.push()
-        counter.set_text(f"{feed.sent} live samples")
-
-    ui.timer(0.1, refresh)
+    feed.push()  # the ring buffer so far, then every new sample as it is read
+    feed.follow()
+    ui.timer(0.5, lambda: counter.set_text(f"{feed.sent} live samples"))

@@ -93,12 +93,19 @@ def test_poller_reads_writes_and_audits_against_the_soft_plc(tmp_path) -> None:
         store = Store(tmp_path)
         async with SoftPlc(bundle_text(), port=0) as plc:
             poller = Poller(model, "127.0.0.1", plc.port, rate_hz=10, store=store)
+            pushed: list[int] = []
+
+            def broken() -> None:
+                raise RuntimeError("page gone")
+
+            poller.listeners |= {lambda: pushed.append(poller.seq), broken}
             poller.start()
             for _ in range(50):
                 await asyncio.sleep(0.1)
                 if len(poller.samples) >= 5 and poller.diag.scan_count:
                     break
             assert poller.diag.connected and not poller.stale
+            assert len(pushed) >= 5 and broken not in poller.listeners  # a failing page is dropped
             assert poller.diag.requests_per_cycle <= 8
             ok = await poller.write({"fSetpointZone1": 55.0}, "operator")
             assert ok.ok, ok.message

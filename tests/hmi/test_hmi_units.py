@@ -166,6 +166,14 @@ def test_simulate_cli_refuses_bad_input() -> None:
     assert main(["simulate", "--plc", "host-without-port"]) == 2
     assert main(["hmi", "--plc", "x"]) == 2
     assert main(["hmi", "--rate", "nan"]) == 2
+    import socket
+
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        assert main(["hmi", "--port", str(port), "--plc", "127.0.0.1:1"]) == 2  # address in use
+        assert main(["simulate", "--port", str(port)]) == 2
 
 
 def test_simulate_plant_writes_pv_over_modbus_to_a_plc(tmp_path) -> None:

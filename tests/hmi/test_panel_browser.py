@@ -165,7 +165,8 @@ def _tune(stack: Stack, pg) -> tuple[dict, dict]:
     pg.goto(stack.url + "/tuning?zone=1")
     before = stack.read(*GAINS)
     pg.get_by_test_id("tune-start").click()
-    expect()(pg.get_by_test_id("tune-phase")).to_contain_text("TUNING", timeout=10000)
+    expect()(pg.get_by_text("TUNE zone 1: accepted by the PLC")).to_be_visible()
+    expect()(pg.get_by_test_id("tune-phase")).to_contain_text("TUNING", timeout=20000)
     shot(pg, "tuning-running")
     wait_for(lambda: "TUNED" in pg.get_by_test_id("tune-phase").inner_text(), TUNE_TIMEOUT_S,
              "the controller to report TUNED")
@@ -178,6 +179,7 @@ def test_tuning_reject_restores_and_accept_keeps(stack: Stack, pg) -> None:
     pg.goto(stack.url + "/zone/1")
     login(pg, stack, "engineer", ENGINEER_PASSWORD)
     pg.get_by_test_id("mode-IDLE").click()
+    expect()(pg.get_by_text("mode IDLE: accepted by the PLC")).to_be_visible()
     pg.get_by_test_id("in-setpoint").fill("200")
     pg.get_by_test_id("set-setpoint").click()
     expect()(pg.get_by_text("accepted by the PLC").first).to_be_visible()
@@ -191,10 +193,10 @@ def test_tuning_reject_restores_and_accept_keeps(stack: Stack, pg) -> None:
     restored = stack.read(*GAINS)
     assert restored == pytest.approx(before)
     # second run: accept keeps the tuned set
-    pg.get_by_test_id("nav-overview").click()
     pg.goto(stack.url + "/zone/1")
     pg.get_by_test_id("mode-IDLE").click()
-    time.sleep(0.5)
+    expect()(pg.get_by_test_id("fp-state")).to_have_text("IDLE")
+    expect()(pg.get_by_text("mode IDLE: accepted by the PLC")).to_be_visible()  # the write is complete
     _, after2 = _tune(stack, pg)
     pg.get_by_test_id("tune-accept").click()
     expect()(pg.get_by_test_id("tune-decided")).to_contain_text("accepted")

@@ -24,7 +24,20 @@ class HmiOptions:
     rate_hz: float = 10.0
 
 
+def check_port_free(host: str, port: int) -> None:
+    """Raise OSError with a clear reason when the panel's address cannot be bound (before NiceGUI starts)."""
+    import socket
+
+    with socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET) as s:
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        s.bind((host, port))
+
+
 def run(opts: HmiOptions) -> None:
+    import logging
+
+    check_port_free(opts.host, opts.port)
+    logging.getLogger("pymodbus").setLevel(logging.CRITICAL)  # the panel shows the connection state itself
     os.environ.setdefault("NICEGUI_STORAGE_PATH", str((opts.data_dir / "nicegui").resolve()))
     from nicegui import app, ui
 

@@ -132,6 +132,8 @@ def run(quick: bool) -> None:
                 if proc is not None and proc.poll() is None:
                     proc.terminate()
                     proc.wait(timeout=10)
+    load = os.getloadavg()[0]
+    print(f"  (machine load average {load:.1f} on {os.cpu_count()} cores during the measurement)")
     print(f"  poll-to-browser latency at {RATE_HZ:g} Hz ({tabs} trend tab(s), {window:g} s): median "
           f"{f['lat_median_ms']:.0f} ms, p95 {f['lat_p95_ms']:.0f} ms (goal p95 < 300 ms)")
     print(f"  panel server CPU: {f['cpu_idle_pct']:.1f} % with no tab (poll loop), "

@@ -38,5 +38,5 @@ def main_hmi(args: argparse.Namespace) -> int:
     except AccessConfigError as exc:
         raise UserError(str(exc)) from None
     except OSError as exc:
-        raise UserError(f"cannot serve the panel on {args.host}:{args.port}: {exc}") from None
+        raise UserError(f"cannot serve the panel on {args.host}:{args.port}: {exc.strerror or exc}") from None
     return 0

@@ -87,17 +87,29 @@ def params_page(zone: int = 1) -> None:
             groups.setdefault(meta.group or "other", []).append(name)
     order = [g for g in GROUP_ORDER if g in groups] + sorted(g for g in groups if g not in GROUP_ORDER)
     rows: list[tuple[str, ui.label]] = []
-    for g in order:
-        with ui.expansion(GROUP_TITLES.get(g, g.replace("_", " ")), value=g in ("pid_heating", "setpoint")
-                          ).classes("w-full").props(f'data-testid="group-{g}"'):
-            for name in groups[g]:
-                rows.append((name, _param_row(name)))
+    built: set[str] = set()
 
     def refresh() -> None:
         for name, lab in rows:
             lab.set_text(value_text(name))
 
-    refresh()
+    def build(g: str, exp: ui.expansion) -> None:
+        """A group's rows are made when it is first opened (a page of every parameter is slow)."""
+        if g in built:
+            return
+        built.add(g)
+        with exp:
+            for name in groups[g]:
+                rows.append((name, _param_row(name)))
+        refresh()
+
+    for g in order:
+        exp = ui.expansion(GROUP_TITLES.get(g, g.replace("_", " "))).classes("w-full").props(
+            f'data-testid="group-{g}"')
+        exp.on_value_change(lambda e, g=g, exp=exp: build(g, exp) if e.value else None)
+        if g in ("pid_heating", "setpoint"):
+            exp.set_value(True)
+
     ui.timer(1.0, refresh)
 
 
@@ -109,8 +121,12 @@ def _param_row(name: str) -> ui.label:
             ui.label(name).classes("text-weight-medium")
             ui.label(tag.comment).classes("text-caption text-grey-7")
         current = ui.label().classes("w-28").props(f'data-testid="val-{name}"')
-        bounded = meta.min is not None or meta.max is not None
-        rng = f"{fmt(meta.min)} … {fmt(meta.max)}" if bounded else "no range"
+        if meta.min is not None and meta.max is not None:
+            rng = f"{fmt(meta.min)} … {fmt(meta.max)}"
+        elif meta.min is not None or meta.max is not None:
+            rng = f"≥ {fmt(meta.min)}" if meta.min is not None else f"≤ {fmt(meta.max)}"
+        else:
+            rng = "no range"
         ui.label(f"{rng} {meta.unit}; default {fmt(meta.default)}").classes("w-56 text-caption")
         box = ui.input().props(f'dense data-testid="in-{name}"').classes("w-32")
         msg = ui.label().classes("text-negative text-caption").props(f'data-testid="msg-{name}"')

@@ -62,7 +62,13 @@ class LiveFeed:
         self.last_seq = samples[-1].seq
         self.sent += len(rows)
         # json.dumps writes NaN / Infinity, which are valid JavaScript expressions
-        ui.run_javascript(f"thermost.add({self.chart.id}, {json.dumps(rows)}, {backlog})")
+        self.chart.client.run_javascript(f"thermost.add({self.chart.id}, {json.dumps(rows)}, {backlog})")
+
+    def follow(self) -> None:
+        """Push each sample as soon as the poller has it (no page-timer wait), until the page goes."""
+        listeners = panel().poller.listeners
+        listeners.add(self.push)
+        self.chart.client.on_delete(lambda: listeners.discard(self.push))
 
 
 def _time_axis() -> dict:
@@ -104,7 +110,7 @@ def _zone_card(z: ZoneModel) -> None:
         y = p.value(z["y"])
         bar.set_value(0 if y is None else max(0.0, min(1.0, abs(float(y)) / 100.0)))
         live_text(ylab, lambda: "output " + value_text(z["y"], 1))
-        active = [t for zn, _b, t in p.poller.active_alarms() if zn == z.number]
+        active = [t.split(":")[0] for zn, _b, t in p.poller.active_alarms() if zn == z.number]
         alarm.set_text("; ".join(active) if active else "")
         feed.push()
 
@@ -262,9 +268,11 @@ def trend_page(zone: int = 1) -> None:
              "data": []},
             {"name": "Tv s", "type": "line", "showSymbol": False, "xAxisIndex": 1, "yAxisIndex": 3,
              "data": []},
+            {"name": "Td s", "type": "line", "showSymbol": False, "xAxisIndex": 1, "yAxisIndex": 3,
+             "data": []},
         ],
     }).classes("w-full").style("height: 560px").props('data-testid="trend-chart"')
-    feed = LiveFeed(chart, z, TREND_KEEP_S, [1, 2, 3, 4, 5, 6], state=8, alarm=9)
+    feed = LiveFeed(chart, z, TREND_KEEP_S, [1, 2, 3, 4, 5, 6, 7], state=8, alarm=9)
     # history from the database first (survives a restart), then the live ring buffer
     first_live = p.poller.samples[0].t if p.poller.samples else time.time()
     rows = [[round(t * 1000), pv, w, y, kp, tn, tv, None, state, alarm]
@@ -274,8 +282,6 @@ def trend_page(zone: int = 1) -> None:
     pause.on_value_change(
         lambda e: ui.run_javascript(f"thermost.pause({chart.id}, {json.dumps(bool(e.value))})"))
 
-    def refresh() -> None:
-        feed.push()
-        counter.set_text(f"{feed.sent} live samples")
-
-    ui.timer(0.1, refresh)
+    feed.push()  # the ring buffer so far, then every new sample as it is read
+    feed.follow()
+    ui.timer(0.5, lambda: counter.set_text(f"{feed.sent} live samples"))

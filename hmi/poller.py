@@ -16,6 +16,7 @@ import math
 import statistics
 import time
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from modbus_bridge.alarm_texts import alarm_texts, describe_bits, error_texts
@@ -83,6 +84,7 @@ class Poller:
         self._scan_ref: tuple[float, int] | None = None
         self._task: asyncio.Task | None = None
         self._slow_due = False  # a zone changed state: read the parameters / identified plant now
+        self.listeners: set[Callable[[], None]] = set()
         self._stop = asyncio.Event()
 
     # --- life cycle ---------------------------------------------------------------------------------
@@ -148,6 +150,11 @@ class Poller:
         self.values.update(values)
         self.seq += 1
         self.samples.append(Sample(self.seq, now, values))
+        for listener in list(self.listeners):  # pages that stream samples (the trend)
+            try:
+                listener()
+            except Exception:  # noqa: BLE001 - a page that went away must not stop the poll loop
+                self.listeners.discard(listener)
         self._track_alarms(values)
         self._store(now, values)
 
@@ -262,7 +269,8 @@ class Poller:
             was_set = words_before.get(z, 0) >> PARAM_ERROR_BIT & 1
             # a latched bit from an earlier refusal stays until acknowledged: then the error id decides
             if word >> PARAM_ERROR_BIT & 1 and (not was_set or err != 0):
-                problems.append(f"zone {z}: parameter error ({self.error_text.get(err, f'error id {err}')})")
+                why = self.error_text.get(err, f"error id {err}") if err else f"alarm bit {PARAM_ERROR_BIT}"
+                problems.append(f"zone {z}: parameter error ({why})")
         if problems:
             message = "refused by the PLC: " + "; ".join(problems)
             self._audit(level, values, old, "refused", message)

@@ -172,6 +172,7 @@ class Simulation:
     async def run(self, stop: asyncio.Event) -> None:
         dt = self.sim.scenario.dt_s
         configured = False
+        waiting = False
         while not stop.is_set():
             try:
                 async with PlcClient(self.host, self.port, self.sim.regmap, name="PLC") as client:
@@ -185,6 +186,9 @@ class Simulation:
             except PlcError as exc:
                 if self.connected:
                     self.log(f"PLC lost ({exc}); plant holds its inputs and retries")
+                elif not waiting:
+                    self.log(f"waiting for the PLC at {self.host}:{self.port} ({exc})")
+                waiting = True
                 self.connected = False
                 with contextlib.suppress(TimeoutError):
                     await asyncio.wait_for(stop.wait(), RETRY_S)
@@ -316,6 +320,10 @@ def main_simulate(args) -> int:
 
     def log(text: str) -> None:
         print(f"simulate: {text}", flush=True)
+
+    import logging
+
+    logging.getLogger("pymodbus").setLevel(logging.CRITICAL)  # connection trouble is reported above
 
     try:
         return asyncio.run(simulate(sim, host=args.host, port=args.port, speed=speed, plc=plc, log=log))

@@ -93,12 +93,19 @@ def test_poller_reads_writes_and_audits_against_the_soft_plc(tmp_path) -> None:
         store = Store(tmp_path)
         async with SoftPlc(bundle_text(), port=0) as plc:
             poller = Poller(model, "127.0.0.1", plc.port, rate_hz=10, store=store)
+            pushed: list[int] = []
+
+            def broken() -> None:
+                raise RuntimeError("page gone")
+
+            poller.listeners |= {lambda: pushed.append(poller.seq), broken}
             poller.start()
             for _ in range(50):
                 await asyncio.sleep(0.1)
                 if len(poller.samples) >= 5 and poller.diag.scan_count:
                     break
             assert poller.diag.connected and not poller.stale
+            assert len(pushed) >= 5 and broken not in poller.listeners  # a failing page is dropped
             assert poller.diag.requests_per_cycle <= 8
             ok = await poller.write({"fSetpointZone1": 55.0}, "operator")
             assert ok.ok, ok.message
@@ -159,3 +166,40 @@ def test_simulate_cli_refuses_bad_input() -> None:
     assert main(["simulate", "--plc", "host-without-port"]) == 2
     assert main(["hmi", "--plc", "x"]) == 2
     assert main(["hmi", "--rate", "nan"]) == 2
+    import socket
+
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        assert main(["hmi", "--port", str(port), "--plc", "127.0.0.1:1"]) == 2  # address in use
+        assert main(["simulate", "--port", str(port)]) == 2
+
+
+def test_simulate_plant_writes_pv_over_modbus_to_a_plc(tmp_path) -> None:
+    """The plant side alone (as with --plc HOST:PORT) against a real-time soft-PLC at 10 x."""
+    from modbus_bridge.client import PlcClient
+    from modbus_bridge.scenario import load_scenario, resolve_scenario
+    from modbus_bridge.simulate import PlantSim, Simulation
+    from plc.bundle import bundle_text, with_speed
+    from plc.runtime.server import SoftPlc
+
+    async def scenario() -> None:
+        rm = load_register_map()
+        async with SoftPlc(with_speed(bundle_text(), 10), port=0) as plc:
+            sim = PlantSim(load_scenario(resolve_scenario("seed003_hotend_fuzzy")), rm)
+            runner = Simulation(sim, "127.0.0.1", plc.port, 10.0, log=lambda _s: None)
+            stop = asyncio.Event()
+            task = asyncio.create_task(runner.run(stop))
+            async with PlcClient("127.0.0.1", plc.port, rm) as c:
+                await asyncio.sleep(0.5)
+                await c.write_tags({"nModeZone1": 4, "fYManualZone1": 50.0})  # MANUAL 50 %
+                await asyncio.sleep(2.5)  # 25 s of plant time: past the 10.6 s dead time
+                v = await c.read_tags(["fPvZone1", "fYZone1"])
+            stop.set()
+            await task
+        assert runner.steps > 100 and runner.connected
+        assert v["fYZone1"] == pytest.approx(50.0)
+        assert v["fPvZone1"] > 162.0  # the plant (160 degC at rest) heats with the PLC's output
+
+    asyncio.run(scenario())

@@ -34,7 +34,7 @@ def test_optimise_is_reproducible_and_improves_on_its_start(tmp_path, capsys):
     a, b = outs
     assert a["parameters"] == b["parameters"] and a["cost_value"] == b["cost_value"]
     assert a["seed"] == 11 and a["evaluations"] >= 7
-    assert a["objective"] <= a["start"]["cost_value"] * (1 + 1e-9) or a["start"]["ms"] > a["max_ms"]
+    assert a["objective"] <= a["start"]["objective"]  # the start is one of the experiments
     assert set(a["registers"]) == {"fKpZone1", "fTnZone1", "fTvZone1", "fTdZone1"}
     assert a["registers"]["fKpZone1"] == a["parameters"]["kp_pct_per_c"] > 0
     assert "small fopdt: Kp" in capsys.readouterr().out

@@ -20,7 +20,6 @@ from dataclasses import dataclass, field
 from typing import ClassVar
 
 import numpy as np
-from scipy import signal
 
 from .base import DelayLine, Plant, PlantDisturbance
 
@@ -73,6 +72,8 @@ class _LtiPlant(Plant):
         self.dc_gain = float(num[-1] / den[-1]) if num.size else 0.0
         if abs(self.dc_gain) <= 0.0:
             raise ValueError("the steady-state gain num(0)/den(0) must not be 0")
+        from scipy import signal  # imported on first use: plants load with every command
+
         self._a, self._b, self._c, self._d = signal.tf2ss(num, den)
         self._disc: dict[tuple[float, float], tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = {}
         self.reset()
@@ -94,6 +95,8 @@ class _LtiPlant(Plant):
         scale = float(self.time_constant_scale)  # type: ignore[attr-defined]
         key = (dt, scale)
         if key not in self._disc:
+            from scipy import signal
+
             # G(s·scale): the same model on a time axis stretched by `scale` = the nominal model over dt/scale
             ad, bd, cd, dd, _ = signal.cont2discrete((self._a, self._b, self._c, self._d), dt / scale, "zoh")
             self._disc[key] = (ad, bd[:, 0], cd[0], dd[0])

@@ -7,11 +7,13 @@ import re
 import sys
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from plc.cli import UserError
 
-from ..scenario import ScenarioError, load_scenario, resolve_scenario, shipped_scenarios
-from .build import Card, build_card
+if TYPE_CHECKING:
+    from .build import Card
+
 
 QUICK_SCENARIOS = ("seed003_hotend_fuzzy",)
 QUICK_EVALS = 6
@@ -69,6 +71,8 @@ def main_scorecard(args: argparse.Namespace) -> int:
 
     from ..client import PlcError
     from ..optimise.executor import ExecutorError, make_executor
+    from ..scenario import ScenarioError, load_scenario, resolve_scenario, shipped_scenarios
+    from .build import Card, build_card
     from .report import card_markdown, write_reports
 
     evals = args.evals if args.evals is not None else (QUICK_EVALS if args.quick else FULL_EVALS)

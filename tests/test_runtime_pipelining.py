@@ -45,9 +45,11 @@ def test_thirty_reads_and_two_full_writes_in_one_segment_are_all_answered():
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
             sock.sendall(burst)
             replies = [read_reply(sock) for _ in frames]
-    assert [tid for tid, _ in replies] == [1, 2] + [10 + i for i in range(FC3_COUNT)], "every request, in order"
+    expected = [1, 2] + [10 + i for i in range(FC3_COUNT)]
+    assert [tid for tid, _ in replies] == expected, "every request, in order"
     assert replies[0][1] == struct.pack(">BHH", 16, HOLDING_BASE, FC16_WORDS)
     assert replies[1][1] == struct.pack(">BHH", 16, HOLDING_BASE + FC16_WORDS, FC16_WORDS)
     for i, (_, body) in enumerate(replies[2:]):
         assert body[:2] == bytes([3, 8])
-        assert list(struct.unpack(">4H", body[2:])) == words_a[4 * i: 4 * i + 4], f"read {i} sees the write before it"
+        got = list(struct.unpack(">4H", body[2:]))
+        assert got == words_a[4 * i: 4 * i + 4], f"read {i} sees the write before it"

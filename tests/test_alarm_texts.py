@@ -31,3 +31,11 @@ def test_docs_table_is_generated_from_the_source():
     text = DOC.read_text(encoding="utf-8")
     block = text.split(DOCS_BEGIN, 1)[1].split(DOCS_END, 1)[0].strip()
     assert block == markdown_table(), "run `python -m modbus_bridge.alarms --markdown` into docs/library.md"
+
+
+def test_harness_unlock_key_is_the_applications():
+    from modbus_bridge.binding import UNLOCK_KEY
+
+    gen = (Path(__file__).resolve().parents[1] / "plc" / "app" / "gen_application.py").read_text()
+    m = re.search(r"nUnlockKeyValue : DINT := 16#([0-9A-F]+);", gen)
+    assert m and int(m.group(1), 16) == UNLOCK_KEY

@@ -47,7 +47,7 @@ def cases():
             yield pytest.param(plant, fault, marks=[] if (plant, fault) in QUICK else [pytest.mark.slow])
 
 
-def check(harness, plant: str, fault: str, settle_s: float = 60.0):
+def check(harness, plant: str, fault: str, settle_s: float = 120.0):
     goal = goal_s(fault, 0.0 if fault in ("frozen_pv", "stale_pv") else 30.0)
     run = asyncio.run(run_fault(plant, fault, harness, plc=os.environ.get(PLC_ENV), settle_s=settle_s,
                                 after_s=goal + 5.0))

@@ -113,6 +113,7 @@ def run(quick: bool) -> None:
         )
     run_panel(quick)
     control_quality(quick)
+    maybe_fault_table()
 
 
 def run_panel(quick: bool) -> None:
@@ -182,3 +183,92 @@ def control_quality(quick: bool) -> None:
         f"{workers} workers): local processes {local:.2f} experiments/s | Dask LocalCluster {dask} "
         f"(load average {os.getloadavg()[0]:.1f})"
     )
+
+
+# ---- fault detection (THERMOST_BENCH_FAULTS=1: about 20 closed-loop runs, several minutes) ----
+
+FAULT_ENV = "THERMOST_BENCH_FAULTS"
+FAULT_PLANTS = ("seed003_hotend_fuzzy", "t1_rrf_hotend", "seed000_forming_platform")
+RRF_DEVIATION_C, RRF_TIME_S = 15.0, 5.0  # RepRapFirmware: model deviation 15 °C for 5 s (control.md)
+MARLIN_HYST_C, MARLIN_PERIOD_S = 4.0, 40.0  # Marlin runaway: 4 °C below W for 40 s
+MARLIN_MAXTEMP_C = 290.0  # the application's absolute limit stands in for Marlin's MAXTEMP
+PRUSA_AFTER_ANOMALY_S = 10.0  # Prusa MK3 thermal model: heating stops 10-12 s after an anomaly (published)
+ANOMALY_C = 1.0  # first visible effect: the PV 1 °C away from its value at the fault
+
+
+def _held(t, cond, hold_s: float, t0: float) -> float | None:
+    start = None
+    for ti, c in zip(t, cond, strict=True):
+        if ti < t0:
+            continue
+        if c:
+            start = ti if start is None else start
+            if ti - start >= hold_s:
+                return ti - t0
+        else:
+            start = None
+    return None
+
+
+def firmware_rules(run, sc) -> dict[str, float | None]:
+    """RRF / Marlin / Prusa rules evaluated on the PV trace of a fault run (times from the fault, s)."""
+    import math
+
+    import numpy as np
+
+    t, pv, y = np.asarray(run.t), np.asarray(run.pv), np.asarray(run.y)
+    sp = float(sc.zones[0].phases[0].setpoint_c or 0.0)
+    out: dict[str, float | None] = {}
+    p = sc.plant_params
+    if {"gain_c_per_pct", "time_constant_s", "dead_time_s"} <= set(p):
+        k, tau, lag = p["gain_c_per_pct"], p["time_constant_s"], p["dead_time_s"]
+        dt = sc.dt_s
+        i0 = int(np.searchsorted(t, run.t_fault))
+        model = np.full(t.size, np.nan)
+        x = pv[i0]
+        base = x - k * y[max(i0 - 1, 0)]  # RRF's model is in steady state at the fault
+        for i in range(i0, t.size):
+            u = y[max(i - round(lag / dt), 0)]
+            x += dt / tau * (base + k * u - x)
+            model[i] = x
+        out["RRF"] = _held(t, np.abs(pv - model) > RRF_DEVIATION_C, RRF_TIME_S, run.t_fault)
+    else:
+        out["RRF"] = math.nan  # no FOPDT parameters in the scenario
+    marlin = (pv < sp - MARLIN_HYST_C) | (pv > MARLIN_MAXTEMP_C)
+    out["Marlin"] = _held(t, marlin, MARLIN_PERIOD_S, run.t_fault)
+    after = (t >= run.t_fault) & (np.abs(pv - pv[int(np.searchsorted(t, run.t_fault))]) > ANOMALY_C)
+    idx = np.flatnonzero(after)
+    out["Prusa"] = float(t[idx[0]] - run.t_fault + PRUSA_AFTER_ANOMALY_S) if idx.size else None
+    return out
+
+
+def fault_table() -> None:
+    from .faults import FAULTS, run_fault
+
+    def fmt(v) -> str:
+        if v is None:
+            return "never"
+        return "n/a" if v != v else f"{v:.1f}"
+
+    print("fault detection (s after the fault; off = output 0 for good; peak = true temperature after it):")
+    print(f"  {'plant':26s} {'fault':19s} {'L':>5s} {'detect':>7s} {'off':>7s} {'peak':>7s} "
+          f"{'RRF':>7s} {'Marlin':>7s} {'Prusa':>7s}")
+    for name in FAULT_PLANTS:
+        sc = load_scenario(resolve_scenario(name))
+        for fault in FAULTS:
+            try:
+                run = asyncio.run(run_fault(name, fault, settle_s=120.0, after_s=60.0))
+            except Exception as exc:  # noqa: BLE001 - a bench reports what it could not measure
+                print(f"  {name:26s} {fault:19s} not measured ({type(exc).__name__}: {exc})")
+                continue
+            rules = firmware_rules(run, sc)
+            print(f"  {name:26s} {fault:19s} {run.dead_time_s:5.1f} {fmt(run.detection_s()):>7s} "
+                  f"{fmt(run.off_s()):>7s} {run.peak_c():7.1f} {fmt(rules['RRF']):>7s} "
+                  f"{fmt(rules['Marlin']):>7s} {fmt(rules['Prusa']):>7s}", flush=True)
+
+
+def maybe_fault_table() -> None:
+    if os.environ.get(FAULT_ENV):
+        fault_table()
+    else:
+        print(f"  fault-detection table: set {FAULT_ENV}=1 (about 20 closed-loop runs)")

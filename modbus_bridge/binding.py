@@ -20,6 +20,8 @@ ROLE_PATTERNS: dict[str, tuple[str, ...]] = {
     "pv": (r"fPvZone{n}", r"fXZone{n}", r"fActualZone{n}", r"fPv{n}", r"fX{n}"),
     # raw counts a Modbus client may write (the application's %IW hardware input is read-only)
     "pv_raw": (r"nPvRawModbusZone{n}", r"nPvRawZone{n}", r"nRawZone{n}", r"nAdcZone{n}", r"nRaw{n}"),
+    # engineering unlock of the safety settings (docs/library.md: parameter protection)
+    "unlock": (r"nUnlockKeyZone{n}",),
     # heartbeat: the PV writer changes it with every new PV (the PLC's stale-PV watchdog)
     "pv_seq": (r"nPvSeqZone{n}",),
     "pv_select": (r"bUseRawZone{n}", r"bPvRawZone{n}", r"bRawInputZone{n}"),
@@ -55,6 +57,8 @@ ROLE_PATTERNS: dict[str, tuple[str, ...]] = {
     "tn_eff": (r"fFuzzyTnZone{n}", r"fTnEffZone{n}", r"fTnEffectiveZone{n}"),
     "tv_eff": (r"fFuzzyTvZone{n}", r"fTvEffZone{n}", r"fTvEffectiveZone{n}"),
 }
+# the application's commissioning key (nUnlockKeyValue in plc/app/gen_application.py; a test compares them)
+UNLOCK_KEY = 0x5AFE
 REQUIRED_ROLES = ("pv", "setpoint", "mode", "y", "state")
 # the application's raw inputs span counts 0 .. 32767 (its nPvRaw register comment; nRawFullScale in ST)
 RAW_FULL_SCALE = 32767

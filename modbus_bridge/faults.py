@@ -135,9 +135,9 @@ class _FaultedZone:
     def step(self, y: float, dt: float) -> None:
         u = y
         if self.active and self.fault == "heater_open":
-            u = 0.0 if y > 0.0 else y
+            u = 0.0  # the actuator in use (heater, or the cooler of a cooled zone) delivers nothing
         elif self.active and self.fault == "heater_weak":
-            u = y * WEAK_FRACTION if y > 0.0 else y
+            u = y * WEAK_FRACTION
         elif self.active and self.fault == "stuck_on":
             u = STUCK_ON_PCT
         self.u[self.zone.channel] = u
@@ -169,7 +169,11 @@ async def _run_on(client: PlcClient, sc: Scenario, fault: str, setup: HarnessSet
     if raw:
         writes.update(raw_sensor_parameters(b, fz.zone.sensor.adc))
     fz.sensor.reset(fz.true_c())
+    pv0 = fz.sensor.measure(fz.true_c(), 0.0)  # the PV is in place before the controller runs
+    writes[b["pv_raw"] if raw else b["pv"]] = fz.sensor.last_counts if raw else pv0
     await client.write_tags(writes)
+    if stepped:  # parameter registers become requests on the next scan: apply them before TUNE starts
+        await client.step(RESET_SCANS)
     await client.write_tags({b["mode"]: codes.modes["TUNE"]})
     reads = [b["y"], b["alarm"], b["state"]]
     tuned_code, dt = codes.states.get("TUNED"), sc.dt_s

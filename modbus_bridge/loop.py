@@ -17,7 +17,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from .binding import RAW_FULL_SCALE, RAW_SENSOR_ROLES, ControllerCodes, ZoneBinding
+from .binding import RAW_FULL_SCALE, RAW_SENSOR_ROLES, UNLOCK_KEY, ControllerCodes, ZoneBinding
 from .client import PlcClient, PlcError
 from .plants import Plant, PlantDisturbance, ZoneDisturbance
 from .regmap import RegisterMap, RegisterMapError
@@ -150,6 +150,9 @@ class ZoneSequencer:
             pv_start=pv,
         )
         writes.update(ph.writes)
+        if ph.writes and self.binding.has("unlock"):
+            # the scenario acts as the commissioning engineer: its writes may touch protected settings
+            writes[self.binding["unlock"]] = UNLOCK_KEY
         if ph.mode is not None:
             writes[self.binding["mode"]] = self.codes.modes[ph.mode]
         fuzzy = self.fuzzy_for(ph)

@@ -36,6 +36,7 @@ COIL_VALUES = (0x0000, 0xFF00)
 MBAP_LENGTH_SLICE = slice(4, 6)
 MBAP_LENGTH_OFFSET = 6  # the MBAP length counts the bytes after itself
 EXCEPTION_FLAG = 0x80
+PIPELINE_BUFFER_BYTES = 1 << 20  # unprocessed request bytes kept per connection (a TCP window is 64 KiB+)
 
 
 def load_program(program: ApplicationLike | Path | str, filename: str = "<source>") -> ApplicationLike:
@@ -61,7 +62,17 @@ def _refused_single_coil_frame(frame: bytes) -> int | None:
 
 
 class _PlcRequestHandler(ServerRequestHandler):
-    """Per-connection handler: decodes every frame in the buffer and answers it at once."""
+    """Per-connection handler: decodes every frame in the buffer and answers it at once.
+
+    pymodbus drops a receive buffer longer than its framer's MAX_SIZE (264 bytes: one frame), so 23 FC3
+    requests or two 123-register FC16 arriving in one TCP segment were lost without a reply. The handler
+    keeps up to PIPELINE_BUFFER_BYTES of unprocessed data instead: any pipelined burst that fits a TCP
+    receive window is answered, frame by frame, in order.
+    """
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.max_buffer_size = PIPELINE_BUFFER_BYTES
 
     def callback_data(self, data: bytes, addr: tuple | None = None) -> int:
         consumed = 0

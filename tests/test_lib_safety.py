@@ -1,0 +1,159 @@
+"""Stale-PV watchdog, TUNE abort on a stale or frozen PV, parameter protection (lock, unlock, refusal of
+values that switch protection off) and FB_HeaterMonitor on a simulated FOPDT plant."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from tests.st_helpers import ScanDriver, controller_program, load_test_app
+
+IDLE, ACTIVE, TUNE = 0, 2, 5
+STATE_ERROR = 8
+STALE_BIT, FROZEN_BIT, OPEN_BIT, STUCK_BIT, DETACHED_BIT = 1 << 22, 1 << 21, 1 << 18, 1 << 20, 1 << 19
+TS = 0.1
+PROTECTED = 0x007C1041
+ERR_TUNE_ABORTED = 21
+
+
+@pytest.fixture()
+def uut() -> ScanDriver:
+    drv = ScanDriver(load_test_app(controller_program()))
+    for name, value in (("fKp", 2.0), ("fTn", 20.0), ("fWatchPeriod", 0.0), ("fRunawayPeriod", 0.0),
+                        ("fPvTimeout", 2.0)):
+        drv.set(f"sPar.{name}", value)
+    drv.set("fbUut.fW1", 100.0)
+    return drv
+
+
+def scan(drv: ScanDriver, mode: int, x: float, n: int = 1, beat: bool = True) -> None:
+    drv.set("nMode", mode)
+    drv.set("fbUut.fX", x)
+    for _ in range(n):
+        if beat:
+            drv.set("fbUut.nPvSequence", drv.get("fbUut.nPvSequence") + 1)
+        drv.scan()
+
+
+def test_stale_pv_trips_the_watchdog_and_switches_off(uut):
+    scan(uut, ACTIVE, 95.0, n=50)
+    assert not uut.get("fbUut.dwAlarm") & STALE_BIT
+    assert uut.get("fbUut.fY") > 0.0
+    scan(uut, ACTIVE, 95.0, n=19, beat=False)
+    assert not uut.get("fbUut.dwAlarm") & STALE_BIT, "not before fPvTimeout"
+    scan(uut, ACTIVE, 95.0, n=2, beat=False)
+    assert uut.get("fbUut.dwAlarm") & STALE_BIT
+    assert uut.get("fbUut.fY") == 0.0 and not uut.get("fbUut.bYPWMPos")
+    assert uut.get("nState") == STATE_ERROR
+
+
+@pytest.mark.parametrize("how", ["stale", "frozen"])
+def test_tune_aborts_on_a_stale_or_frozen_pv(uut, how):
+    uut.set("sPar.fFrozenTime", 5.0)
+    x = 20.0
+    for k in range(30):  # a live, noisy PV while TUNE waits for a steady X
+        scan(uut, TUNE, x + 0.01 * (k % 3))
+    assert uut.get("nState") != STATE_ERROR
+    scan(uut, TUNE, x, n=60, beat=how == "frozen")
+    assert uut.get("nState") == STATE_ERROR
+    assert uut.get("fbUut.nErrorId") == ERR_TUNE_ABORTED
+    assert uut.get("fbUut.fY") == 0.0
+    assert uut.get("fbUut.dwAlarm") & (1 << 17)
+
+
+def protect(drv: ScanDriver, unlocked: bool) -> None:
+    drv.set("fbUut.bProtect", True)
+    drv.set("fbUut.bUnlocked", unlocked)
+
+
+@pytest.mark.parametrize(("field", "value"), [("dwAlarmSupp", 0xFFFFFFFF), ("dwAlarmReaction", 0),
+                                               ("eReactionOnFailure", 0), ("fTaskCycleTime", 0.05),
+                                               ("fPvTimeout", 0.0), ("fMonitorDwell", 1e9),
+                                               ("fXMax", 1e9), ("fTempAbsHigh", 1e9)])
+def test_safety_settings_are_locked_without_the_unlock(uut, field, value):
+    protect(uut, unlocked=False)
+    scan(uut, ACTIVE, 95.0, n=3)
+    before = uut.get(f"fbUut.sValid.{field}")
+    uut.set(f"sPar.{field}", value)
+    scan(uut, ACTIVE, 95.0)
+    assert uut.get(f"fbUut.sValid.{field}") == before
+    assert uut.get("fbUut.nRefusal") & 2, "refused: locked"
+    assert uut.get("fbUut.bParamError")
+
+
+def test_unlock_accepts_settings_but_never_switching_protection_off(uut):
+    protect(uut, unlocked=True)
+    scan(uut, ACTIVE, 95.0, n=3)
+    uut.set("sPar.dwAlarmSupp", 0x100)  # a tolerance-band warning may be suppressed
+    uut.set("sPar.fPvTimeout", 5.0)
+    scan(uut, ACTIVE, 95.0)
+    assert uut.get("fbUut.sValid.dwAlarmSupp") == 0x100
+    assert uut.get("fbUut.sValid.fPvTimeout") == pytest.approx(5.0)
+    assert uut.get("fbUut.nRefusal") == 0
+    for field, value in (("dwAlarmSupp", 0x1), ("dwAlarmReaction", 0xD07F), ("eReactionOnFailure", 0),
+                         ("fPvTimeout", 0.0), ("fFrozenTime", 0.0)):
+        good = uut.get(f"fbUut.sValid.{field}")
+        uut.set(f"sPar.{field}", value)
+        scan(uut, ACTIVE, 95.0)
+        assert uut.get(f"fbUut.sValid.{field}") == good, field
+        assert uut.get("fbUut.nRefusal") & 4, f"{field}: would switch protection off"
+        uut.set(f"sPar.{field}", good)
+        scan(uut, ACTIVE, 95.0)
+    uut.set("sPar.bReactionNoneAllowed", True)
+    scan(uut, ACTIVE, 95.0)
+    uut.set("sPar.eReactionOnFailure", 0)
+    scan(uut, ACTIVE, 95.0)
+    assert uut.get("fbUut.nRefusal") == 0, "reaction NONE with its own explicit setting"
+
+
+class Fopdt:
+    """K e^(-Ls) / (1 + Ts) around an ambient, exact discretisation, Gaussian-free deterministic dither."""
+
+    def __init__(self, k: float, t: float, l: float, ambient: float) -> None:
+        self.k, self.t, self.ambient = k, t, ambient
+        self.x = ambient
+        self.delay = [0.0] * round(l / TS)
+        self.n = 0
+
+    def measure(self) -> float:
+        self.n += 1
+        return self.x + 0.02 * math.sin(self.n * 1.7)
+
+    def step(self, u: float) -> None:
+        self.delay.append(u)
+        u_del = self.delay.pop(0)
+        a = math.exp(-TS / self.t)
+        self.x = a * self.x + (1 - a) * (self.ambient + self.k * u_del)
+
+
+@pytest.mark.parametrize("fault", ["heater_open", "stuck_on", "detached"])
+def test_heater_monitor_on_a_simulated_hot_end(uut, fault):
+    k, t, l = 0.59, 23.4, 10.6  # seed 003's hot end
+    for name, value in (("fKs", k), ("fTg", t), ("fTu", l), ("fKp", 5.3), ("fTn", 22.0),
+                        ("fTempAbsHigh", 400.0)):
+        uut.set(f"sPar.{name}", value)
+    uut.set("fbUut.fW1", 200.0)
+    plant = Fopdt(k, t, l, ambient=160.0)
+    t_fault = 300.0
+    detected = None
+    for n in range(round((t_fault + 40.0) / TS)):
+        now = n * TS
+        x = plant.measure()
+        if fault == "detached" and now >= t_fault:
+            x = 25.0 + (x - 25.0) * math.exp(-(now - t_fault) / 2.0)
+        scan(uut, ACTIVE, x)
+        y = uut.get("fbUut.fY")
+        alarm = uut.get("fbUut.dwAlarm")
+        if now < t_fault:
+            monitor_bits = OPEN_BIT | STUCK_BIT | DETACHED_BIT | FROZEN_BIT
+            assert not alarm & monitor_bits, f"false alarm at {now:.1f} s"
+        elif detected is None and alarm & (OPEN_BIT | STUCK_BIT | DETACHED_BIT):
+            detected = (now - t_fault, alarm)
+        u = 0.0 if fault == "heater_open" and now >= t_fault else y
+        plant.step(100.0 if fault == "stuck_on" and now >= t_fault else u)
+    expected = {"heater_open": OPEN_BIT, "stuck_on": STUCK_BIT, "detached": DETACHED_BIT}[fault]
+    assert detected is not None, f"{fault} not detected"
+    assert detected[1] & expected, f"{fault}: alarm {detected[1]:#x}"
+    assert detected[0] <= l + 5.0, f"{fault}: detected after {detected[0]:.1f} s"
+    assert uut.get("fbUut.fY") == 0.0

@@ -7,6 +7,7 @@ from plc.st.codegen.configuration import ConfigGen
 from plc.st.codegen.context import GenContext, Generator
 from plc.st.codegen.expressions import ExprGen
 from plc.st.codegen.initialisers import InitGen
+from plc.st.codegen.invocations import InvocationGen
 from plc.st.codegen.pous import PouGen
 from plc.st.codegen.statements import StmtGen
 from plc.st.index import Index
@@ -22,6 +23,7 @@ def generate(index: Index) -> tuple[str, Instances]:
         "exprs": ExprGen(),
         "calls": CallGen(),
         "stmts": StmtGen(),
+        "invocations": InvocationGen(),
         "inits": InitGen(),
         "pougen": PouGen(),
         "configgen": ConfigGen(),

@@ -153,3 +153,20 @@ def fold(ctx, a: Ex, b: Ex, op: str, t: Type, node: Node) -> Ex:
     x, y = float(x), float(y)
     v = rt.fdiv(x, y) if op == "/" else {"+": x + y, "-": x - y, "*": x * y}[op]
     return Ex(py_float(v), ANY_REAL, "d", v)
+
+
+def negate(a: Ex) -> Ex:
+    """Unary minus on an untyped constant."""
+    if a.t.kind == "anyint":
+        return lit_int(-a.const)
+    return Ex(py_float(-a.const), ANY_REAL, "d", -a.const)
+
+
+def int_const_code(value: int, dst: Type) -> str:
+    """An integer constant stored into a variable of integer type dst (wraps like C)."""
+    return repr(rt.WRAP[(dst.bits, dst.signed)](value))
+
+
+def real_const_code(value: object) -> str:
+    """A real constant stored into a REAL (rounded to binary32 at compile time)."""
+    return py_float(rt.f32(float(value)))

@@ -13,8 +13,8 @@ import re
 
 from tree_sitter import Node
 
-from plc.st import rt
-from plc.st.model import Ex, c_of, py_float, type_label
+from plc.st.literals import int_const_code, real_const_code
+from plc.st.model import Ex, c_of, type_label
 from plc.st.types import ANY_INT, ANY_REAL, REAL, TIME, Type
 
 
@@ -144,7 +144,7 @@ def convert_store(ctx, e: Ex, dst: Type, node: Node, what: str = "':='") -> str:
     if dst.kind == "int":
         if src_t.kind == "anyint":
             if e.const is not None:
-                return repr(rt.WRAP[(dst.bits, dst.signed)](e.const))
+                return int_const_code(e.const, dst)
             return f"w{'s' if dst.signed else 'u'}{dst.bits}({e.code})"
         if src_t.kind == "int" and src_t.name == dst.name:
             wrap = f"w{'s' if dst.signed else 'u'}{dst.bits}"
@@ -161,7 +161,7 @@ def convert_store(ctx, e: Ex, dst: Type, node: Node, what: str = "':='") -> str:
         if src_t.kind == "anyreal" or (src_t.kind == "real" and src_t.name == dst.name):
             if dst is REAL and e.c != "f":
                 if e.const is not None:
-                    return py_float(rt.f32(float(e.const)))
+                    return real_const_code(e.const)
                 return f"f32({e.code})"
             return e.code
         raise ctx.err(

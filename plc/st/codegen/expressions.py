@@ -5,10 +5,10 @@ from __future__ import annotations
 from tree_sitter import Node
 
 from plc.st.codegen.context import Generator
-from plc.st.literals import fold, lit_int, literal
-from plc.st.model import NULL_REF, Ex, Var, c_of, py_float, type_label
+from plc.st.literals import fold, literal, negate
+from plc.st.model import NULL_REF, Ex, Var, c_of, type_label
 from plc.st.typerules import arith_type, bit_type, common_c, compare_types, literal_c, to_c
-from plc.st.types import ANY_REAL, BOOL, TIME, Type
+from plc.st.types import BOOL, TIME, Type
 
 CMP_OPS = {"=": "==", "<>": "!=", "<": "<", ">": ">", "<=": "<=", ">=": ">="}
 ARITH_OPS = {"+", "-", "*", "/", "MOD"}
@@ -173,9 +173,7 @@ class ExprGen(Generator):
             raise self.ctx.err(self.ctx.src, node, f"NOT is not defined for {a.t.name}")
         if op == "-":
             if a.const is not None and a.t.kind in ("anyint", "anyreal"):
-                if a.t.kind == "anyint":
-                    return lit_int(-a.const)
-                return Ex(py_float(-a.const), ANY_REAL, "d", -a.const)
+                return negate(a)
             if a.c in ("f", "d"):
                 return Ex(f"(-{a.code})", a.t, a.c)
             if a.t.kind == "time":

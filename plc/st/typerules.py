@@ -19,6 +19,7 @@ from plc.st.types import ANY_INT, ANY_REAL, REAL, TIME, Type
 
 
 def common_c(a: str, b: str) -> str:
+    """C's usual arithmetic conversions on the classes of two operands."""
     if "d" in (a, b):
         return "d"
     if "f" in (a, b):

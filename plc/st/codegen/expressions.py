@@ -22,11 +22,11 @@ class ExprGen(Generator):
         if k == "parenthesized_expression":
             inner = self.expr(node.named_children[0], expected)
             return Ex(f"({inner.code})", inner.t, inner.c, inner.const)
+        if k == "identifier":
+            return self.identifier(node, expected)
         lit = literal(self.ctx, node)
         if lit is not None:
             return lit
-        if k == "identifier":
-            return self.identifier(node, expected)
         if k == "unary_expression":
             return self.unary(node)
         if k == "binary_expression":

@@ -11,7 +11,7 @@ The comment that follows a declaration on the same line is its description.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 APP_DIR = Path(__file__).resolve().parents[1] / "plc" / "app"
@@ -44,6 +44,67 @@ class RegisterMapError(ValueError):
     pass
 
 
+OWNERS = ("plc", "client", "command", "input")
+_META = re.compile(r"\{([^{}]*)\}\s*$")
+_ZONE = re.compile(r"Zone(\d+)$")
+
+
+@dataclass(frozen=True)
+class TagMeta:
+    """A register's metadata, from the `{key=value; ...}` tail of its declaration comment.
+
+    owner: `plc` (status, rewritten every scan), `client` (parameter; the PLC validates it and the
+    register shows the value in use), `command` (the PLC resets it after acting), `input` (process
+    input written by the plant or harness)."""
+
+    unit: str = ""
+    min: float | None = None
+    max: float | None = None
+    default: float | None = None
+    decimals: int = 0
+    enum: dict[int, str] = field(default_factory=dict)
+    owner: str = "client"
+    group: str = ""
+    zone: int | None = None
+
+    @property
+    def writable_by_client(self) -> bool:
+        return self.owner in ("client", "command", "input")
+
+
+def parse_meta(comment: str, name: str, where: str) -> tuple[str, TagMeta]:
+    """(plain description, metadata) of one declaration comment."""
+    zone_match = _ZONE.search(name)
+    zone = int(zone_match.group(1)) if zone_match else None
+    m = _META.search(comment)
+    if not m:
+        return comment, TagMeta(zone=zone)
+    values: dict[str, object] = {"zone": zone}
+    for item in filter(None, (part.strip() for part in m.group(1).split(";"))):
+        key, sep, value = item.partition("=")
+        key, value = key.strip(), value.strip()
+        try:
+            if not sep:
+                raise ValueError("expected key=value")
+            if key in ("min", "max", "default"):
+                values[key] = float(value)
+            elif key == "dec":
+                values["decimals"] = int(value)
+            elif key == "enum":
+                values["enum"] = {int(k): t for k, _, t in (e.partition(":") for e in value.split(","))}
+            elif key == "owner":
+                if value not in OWNERS:
+                    raise ValueError(f"owner must be one of {', '.join(OWNERS)}")
+                values["owner"] = value
+            elif key in ("unit", "group"):
+                values[key] = value
+            else:
+                raise ValueError("unknown key")
+        except ValueError as exc:
+            raise RegisterMapError(f"{where}: {name}: bad metadata {item!r}: {exc}") from None
+    return comment[: m.start()].rstrip(), TagMeta(**values)  # type: ignore[arg-type]
+
+
 @dataclass(frozen=True)
 class Tag:
     name: str
@@ -60,6 +121,7 @@ class Tag:
     words: int  # registers (0 for bits)
     writable: bool  # a Modbus client may write it
     source: str  # file:line
+    meta: TagMeta = field(default_factory=TagMeta)
 
     @property
     def is_bit(self) -> bool:
@@ -162,6 +224,7 @@ def _make_tag(node, addr, program: str, filename: str, src: bytes) -> Tag:
     if mapped is None:
         raise RegisterMapError(f"{filename}:{line}: {location} has no Modbus address in OpenPLC's map")
     table, address, writable = mapped
+    description, meta = parse_meta(_comment_after(node, src), names[0], f"{Path(filename).name}:{line}")
     return Tag(
         name=names[0],
         program=program,
@@ -171,12 +234,13 @@ def _make_tag(node, addr, program: str, filename: str, src: bytes) -> Tag:
         index=index,
         bit=int(bit) if bit is not None else None,
         iec_type=iec_type,
-        comment=_comment_after(node, src),
+        comment=description,
         table=table,
         address=address,
         words=WORDS_PER_SIZE[size],
         writable=writable,
         source=f"{Path(filename).name}:{line}",
+        meta=meta,
     )
 
 
@@ -218,7 +282,13 @@ def markdown(regmap: RegisterMap) -> str:
         "",
         "Addresses are 0-based Modbus addresses as OpenPLC v3 maps them (`reference/openplc.md`): "
         "32-bit values (%MD) take two holding registers, high word first; REAL is IEEE 754 binary32. "
-        "BOOLs at %QX are coils, at %IX discrete inputs (read only). %IW are input registers (read only).",
+        "BOOLs at %QX are coils, at %IX discrete inputs (read only). %IW are input registers (read only). "
+        "Write a 32-bit value in one request (FC16), never word by word.",
+        "",
+        "Owner: **plc** = status the PLC rewrites every scan (a client write is overwritten: read only); "
+        "**client** = a parameter a client writes; the PLC checks it, the register shows the value in use; "
+        "**command** = the PLC resets it after acting on it; **input** = process input written by the plant "
+        "or harness. Range is what the PLC accepts; default is per zone (zone 1 / zone 2 where they differ).",
         "",
     ]
     order = (HOLDING, COIL, INPUT, DISCRETE)
@@ -231,15 +301,26 @@ def markdown(regmap: RegisterMap) -> str:
         lines += [
             f"## {table}s",
             "",
-            "| address | words | location | tag | type | access | description |",
-            "|---:|---:|---|---|---|---|---|",
+            "| address | words | location | tag | type | owner | unit | range | default | description |",
+            "|---:|---:|---|---|---|---|---|---|---|---|",
         ]
         for t in tags:
-            access = "R/W" if t.writable else "R"
-            desc = t.comment.replace("|", "\\|")
+            m = t.meta
+            owner = m.owner if t.writable else f"{m.owner} (R)"
+            rng = "" if m.min is None and m.max is None else f"{_num(m.min)} .. {_num(m.max)}"
+            desc = t.comment
+            if m.enum:
+                desc += " (" + ", ".join(f"{k} {v}" for k, v in sorted(m.enum.items())) + ")"
+            desc = desc.replace("|", "\\|")
             lines.append(
-                f"| {t.address} | {t.words or '-'} | `{t.location}` | `{t.name}` | {t.iec_type} | "
-                f"{access} | {desc} |"
+                f"| {t.address} | {t.words or '-'} | `{t.location}` | `{t.name}` | {t.iec_type} | {owner} | "
+                f"{m.unit} | {rng} | {_num(m.default) if m.default is not None else ''} | {desc} |"
             )
         lines.append("")
     return "\n".join(lines)
+
+
+def _num(value: float | None) -> str:
+    if value is None:
+        return "-"
+    return f"{value:g}"

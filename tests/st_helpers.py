@@ -1,7 +1,7 @@
 """Pytest-side helpers: load the st_lib library plus a generated test PROGRAM into the soft-PLC.
 
-`library_sources()` returns the portable library (every `st_lib/**/*.st` except the TwinCAT shim and
-the fuzzy helper's folder) as `(filename, text)` pairs. `build_program()` wraps declarations and a body
+`library_sources()` returns the portable library (every `st_lib/**/*.st` except the TwinCAT shim) as
+`(filename, text)` pairs. `build_program()` wraps declarations and a body
 into a PROGRAM + CONFIGURATION with one TASK. `load_test_app()` compiles both with the soft-PLC and
 skips the calling test (with the reason printed) when the soft-PLC is not available yet.
 """

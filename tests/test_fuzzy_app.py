@@ -1,11 +1,9 @@
-"""The adapter inside the OpenPLC application (P_ThermoST generated with plc/app/gen_fuzzy_block.py),
+"""The adapter inside the OpenPLC application (P_ThermoST, zone block of plc/app/zone_body.st.in),
 driven through its registers like an HMI / the harness would."""
 
 from __future__ import annotations
 
-import importlib.util
 import math
-import sys
 
 import numpy as np
 import pytest
@@ -19,23 +17,6 @@ ACTIVE = 2
 TS = 0.1
 
 
-def _load_module(name: str, filename: str):
-    spec = importlib.util.spec_from_file_location(name, APP_DIR / filename)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    return module
-
-
-def app_text() -> str:
-    """P_ThermoST with the fuzzy hooks of gen_fuzzy_block (whether or not the committed file has them yet)."""
-    gen = _load_module("gen_p_thermost_fuzzytest", "gen_p_thermost.py")
-    block = _load_module("gen_fuzzy_block", "gen_fuzzy_block.py")
-    gen.fuzzy_decls = block.fuzzy_decls
-    gen.fuzzy_body = block.fuzzy_body
-    return gen.generate()
-
-
 @pytest.fixture()
 def plc() -> ScanDriver:
     try:
@@ -45,7 +26,7 @@ def plc() -> ScanDriver:
     lib = library_sources() + fuzzy_sources()
     sources = lib + [
         ("plc/app/Config0.st", (APP_DIR / "Config0.st").read_text()),
-        ("P_ThermoST.st", app_text()),
+        ("P_ThermoST.st", (APP_DIR / "P_ThermoST.st").read_text()),
     ]
     drv = ScanDriver(load_application(sources))
     drv.scan()

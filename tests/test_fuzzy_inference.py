@@ -1,6 +1,6 @@
 """FB_FuzzyInference (ST, in the soft-PLC) against the independent oracle of test_fuzzy_oracle.py.
 
-Grid of (E, EC) points per configuration; equal within 1e-4 of the output range (issue 4).
+Grid of (E, EC) points per configuration; equal within 1e-4 of the output range.
 """
 
 from __future__ import annotations

@@ -43,9 +43,9 @@ def test_generated_program_is_up_to_date() -> None:
     import importlib.util
     import sys
 
-    spec = importlib.util.spec_from_file_location("gen_p_thermost", APP_DIR / "gen_p_thermost.py")
+    spec = importlib.util.spec_from_file_location("gen_application", APP_DIR / "gen_application.py")
     module = importlib.util.module_from_spec(spec)
-    sys.modules["gen_p_thermost"] = module
+    sys.modules["gen_application"] = module
     spec.loader.exec_module(module)
     assert module.generate() == (APP_DIR / "P_ThermoST.st").read_text()
 
@@ -166,3 +166,54 @@ def test_raw_counts_from_modbus_register(plc: ScanDriver) -> None:
     plc.scan()
     assert plc.get("fXUsedZone2") == pytest.approx(4.0, abs=0.2)
     assert not plc.get("dwAlarmZone2") & 0x40
+
+
+def fresh_app() -> ScanDriver:
+    from plc.st.compiler import load_application
+
+    return ScanDriver(load_application(app_sources()))
+
+
+def test_refused_write_shows_value_in_use_and_latches_until_ack(plc: ScanDriver) -> None:
+    plc.set("fKpZone1", -5.0)
+    plc.scan(2)
+    assert plc.get("fKpZone1") == pytest.approx(3.7)
+    assert plc.get("fbZone1.sValid.fKp") == pytest.approx(3.7)
+    plc.scan(3)
+    assert plc.get("dwAlarmZone1") & 0x10000
+    plc.set("bAckZone1", True)
+    plc.scan(2)
+    assert not plc.get("dwAlarmZone1") & 0x10000
+    assert plc.get("fKpZone1") == pytest.approx(3.7)
+
+
+def test_accepted_write_is_used_and_shown(plc: ScanDriver) -> None:
+    plc.set("fTnZone1", 61.5)
+    plc.scan(2)
+    assert plc.get("fbZone1.sValid.fTn") == 61.5
+    assert plc.get("fTnZone1") == 61.5
+    assert not plc.get("dwAlarmZone1") & 0x10000
+
+
+def test_restored_store_keeps_registers_and_starts_idle(plc: ScanDriver) -> None:
+    plc.set("fKpZone1", 9.25)
+    plc.set("nModeZone1", ACTIVE)
+    plc.scan(3)
+    stored = {v.name: plc.get(v.name) for v in plc.app.located if v.area == "M"}  # what a store keeps
+    drv = fresh_app()
+    for name, value in stored.items():
+        drv.set(name, value)
+    drv.scan(3)
+    assert drv.get("fKpZone1") == 9.25
+    assert drv.get("fbZone1.sValid.fKp") == 9.25
+    assert drv.get("fTnZone1") == pytest.approx(44.0)
+    assert drv.get("nModeZone1") == IDLE  # never restart into ACTIVE
+
+
+def test_blank_store_takes_defaults_and_writes_signature() -> None:
+    drv = fresh_app()
+    drv.set("fKpZone1", 9.25)
+    drv.scan(3)
+    assert drv.get("fKpZone1") == pytest.approx(3.7)
+    assert drv.get("nStoreSignature") == 0x7E57
+    assert drv.get("fWMaxZone2") == pytest.approx(60.0)

@@ -85,3 +85,32 @@ def test_committed_register_map_document_is_up_to_date():
     fix = "run `thermost regmap --markdown -o docs/register-map.md`"
     assert DOC.exists(), f"docs/register-map.md missing: {fix}"
     assert DOC.read_text(encoding="utf-8") == expected, f"docs/register-map.md is stale: {fix}"
+
+
+def test_every_application_register_carries_metadata() -> None:
+    from modbus_bridge.regmap import OWNERS, load_register_map
+
+    regmap = load_register_map()
+    for tag in regmap.tags.values():
+        assert tag.meta.owner in OWNERS, tag.name
+        assert "{" not in tag.comment, tag.name
+        if tag.meta.owner == "client" and tag.iec_type == "REAL" and tag.name.startswith(("fK", "fT", "fY")):
+            assert tag.meta.default is not None, tag.name
+    kp1, kp2 = regmap["fKpZone1"].meta, regmap["fKpZone2"].meta
+    assert (kp1.unit, kp1.min, kp1.default, kp1.zone) == ("%/degC", 0.0, 3.7, 1)
+    assert kp2.default == 10.0 and kp2.zone == 2
+    assert regmap["nStateZone1"].meta.owner == "plc"
+    assert regmap["nModeZone1"].meta.enum[2] == "ACTIVE"
+    assert regmap["bAckZone1"].meta.owner == "command"
+    assert regmap["fPvZone1"].meta.owner == "input"
+
+
+def test_bad_metadata_names_the_register() -> None:
+    from modbus_bridge.regmap import RegisterMapError, parse_meta
+
+    with pytest.raises(RegisterMapError, match=r"P.st:3: fKp: bad metadata 'min=abc'"):
+        parse_meta("gain {unit=%; min=abc}", "fKp", "P.st:3")
+    with pytest.raises(RegisterMapError, match="owner must be one of"):
+        parse_meta("gain {owner=nobody}", "fKp", "P.st:3")
+    text, meta = parse_meta("gain {unit=%; min=-1; enum=0:A,1:B; owner=plc}", "fKpZone2", "P.st:3")
+    assert text == "gain" and meta.min == -1.0 and meta.enum == {0: "A", 1: "B"} and meta.zone == 2

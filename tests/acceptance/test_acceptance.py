@@ -1,4 +1,4 @@
-"""The library's promises, proved through Modbus against simulated plants (issue 5, item 8):
+"""The library's promises, proved through Modbus against simulated plants:
 - tuning completes and the identified plant lands within 10 % of the true one;
 - on seed 003's hot end the self-tuned fuzzy PID does at least as well as that paper's fuzzy PID:
   overshoot <= 5 %, 2 % settling <= 60 s, back inside the 2 % band within 23 s of the load step;

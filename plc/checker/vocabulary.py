@@ -9,12 +9,24 @@ All sets hold upper-case names; ST identifiers are case-insensitive.
 
 from __future__ import annotations
 
-SIGNED_INT_TYPES = frozenset({"SINT", "INT", "DINT", "LINT"})
-UNSIGNED_INT_TYPES = frozenset({"USINT", "UINT", "UDINT", "ULINT"})
+from plc.st.types import ELEMENTARY
+
+
+def _names(kind: str, **attrs: bool) -> frozenset[str]:
+    """Names of the soft-PLC's elementary types of one kind (one table for checker and compiler)."""
+    return frozenset(
+        name
+        for name, t in ELEMENTARY.items()
+        if t.kind == kind and all(getattr(t, a) == v for a, v in attrs.items())
+    )
+
+
+SIGNED_INT_TYPES = _names("int", bitstring=False, signed=True)
+UNSIGNED_INT_TYPES = _names("int", bitstring=False, signed=False)
 INT_TYPES = SIGNED_INT_TYPES | UNSIGNED_INT_TYPES
-BIT_TYPES = frozenset({"BYTE", "WORD", "DWORD", "LWORD"})
-REAL_TYPES = frozenset({"REAL", "LREAL"})
-TIME_TYPES = frozenset({"TIME", "DATE", "TIME_OF_DAY", "TOD", "DATE_AND_TIME", "DT"})
+BIT_TYPES = _names("int", bitstring=True)
+REAL_TYPES = _names("real")
+TIME_TYPES = _names("time")
 NUMERIC_TYPES = INT_TYPES | BIT_TYPES | REAL_TYPES
 ELEMENTARY_TYPES = NUMERIC_TYPES | TIME_TYPES | frozenset({"BOOL", "STRING"})
 

@@ -38,29 +38,22 @@ def _parser() -> tree_sitter.Parser:
     return tree_sitter.Parser(tree_sitter.Language(tree_sitter_iec61131_3_st.language()))
 
 
+# comments `(* *)` (unterminated: to the end), `//` line comments and '...' / "..." strings with `$`
+# escapes (unterminated: to the end), found left to right as a scanner would
+_NOT_CODE = re.compile(
+    r"\(\*[\s\S]*?(?:\*\)|\Z)"  # (* comment *)
+    r"|//[^\n]*"  # // line comment
+    r"|'(?:\$[\s\S]|[^'$])*(?:'|\$?\Z)"  # 'string'
+    r"|\"(?:\$[\s\S]|[^\"$])*(?:\"|\$?\Z)"  # "wide string"
+)
+
+
 def _code_mask(text: str) -> list[bool]:
     """True for characters that are code (not inside comments or string literals)."""
     mask = [True] * len(text)
-    i, n = 0, len(text)
-    while i < n:
-        if text.startswith("(*", i):
-            j = text.find("*)", i + 2)
-            j = n if j < 0 else j + 2
-        elif text.startswith("//", i):
-            j = text.find("\n", i)
-            j = n if j < 0 else j
-        elif text[i] in "'\"":
-            q = text[i]
-            j = i + 1
-            while j < n and text[j] != q:
-                j += 2 if text[j] == "$" else 1
-            j = min(n, j + 1)
-        else:
-            i += 1
-            continue
-        for k in range(i, j):
-            mask[k] = False
-        i = j
+    for m in _NOT_CODE.finditer(text):
+        i, j = m.span()
+        mask[i:j] = [False] * (j - i)
     return mask
 
 
@@ -145,9 +138,12 @@ def _rewrite(text: str, blank_pragmas: bool) -> tuple[str, dict[int, tuple[str, 
         enum_literals[m.start()] = (m.group(1), m.group(2))
 
     # pragmas: `{attribute ...}` and OpenPLC's `{{ C code }}` do not change the ST semantics we run
-    k = 0 if blank_pragmas else len(text)
-    while k < len(text):
-        if mask[k] and text[k] == "{":
+    k = 0
+    for brace in re.finditer(r"\{", text) if blank_pragmas else ():
+        if brace.start() < k:
+            continue
+        k = brace.start()
+        if mask[k]:
             depth, j = 0, k
             while j < len(text):
                 if text[j] == "{":
@@ -161,8 +157,6 @@ def _rewrite(text: str, blank_pragmas: bool) -> tuple[str, dict[int, tuple[str, 
                 if chars[q] != "\n":
                     chars[q] = _blank(chars[q])
             k = j + 1
-            continue
-        k += 1
 
     for block in _TYPE_BLOCK.finditer(text):
         if not mask[block.start()]:

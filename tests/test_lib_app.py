@@ -106,6 +106,7 @@ def test_tune_through_registers_publishes_parameters(plc: ScanDriver) -> None:
     assert plc.get("fTuZone1") == pytest.approx(5.5, rel=0.1)
     assert plc.get("fTgZone1") == pytest.approx(140.0, rel=0.1)
     assert plc.get("fKsZone1") == pytest.approx(3.4, rel=0.1)
+    plc.scan()  # the register shows the value in use from the next scan on
     assert plc.get("fKpZone1") == plc.get("fbZone1.sValid.fKp")
     assert plc.get("nTuneRuleUsedZone1") == 3  # tau = 0.04: SIMC
     plc.scan(5)
@@ -196,10 +197,21 @@ def test_refused_write_shows_value_in_use_and_latches_until_ack(plc: ScanDriver)
 
 def test_accepted_write_is_used_and_shown(plc: ScanDriver) -> None:
     plc.set("fTnZone1", 61.5)
-    plc.scan(2)
-    assert plc.get("fbZone1.sValid.fTn") == 61.5
+    plc.scan()
+    assert plc.get("fbZone1.sValid.fTn") == 61.5  # used in the scan after the write
+    plc.scan()
     assert plc.get("fTnZone1") == 61.5
     assert not plc.get("dwAlarmZone1") & 0x10000
+
+
+def test_parameter_and_mode_written_together_act_together(plc: ScanDriver) -> None:
+    plc.set("fPvZone2", 20.0)
+    plc.set("fSetpointZone2", 4.0)
+    plc.set("fYTuneZone2", -50.0)  # a cooling step: W below X is then the right side
+    plc.set("nModeZone2", TUNE)
+    plc.scan(3)
+    assert plc.get("nErrorIdZone2") == 0
+    assert plc.get("nStateZone2") == 5
 
 
 def test_restored_store_keeps_registers_and_starts_idle(plc: ScanDriver) -> None:

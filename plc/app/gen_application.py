@@ -125,7 +125,7 @@ def zone_decls(table: list[dict[str, str]], z: Zone) -> tuple[list[str], list[st
         f"    nFuzzyPresetLoadedZone{n} : DINT := -1;",
         f"    fFuzzyTuPrevZone{n} : REAL;",
         f"    fUnlockRemainZone{n} : REAL;",
-        f"    bWrittenZone{n}, bWrittenPrevZone{n} : BOOL;",
+        f"    bWrittenZone{n} : BOOL;",
         f"    bRefInvalidZone{n}, bRefLockedZone{n}, bRefDisableZone{n} : BOOL;",
     ]
     return loc, internal

@@ -128,6 +128,14 @@ def openplc_scan() -> str:
     )
 
 
+@producer("scorecard", measured=True)
+def scorecard() -> str:
+    """docs/scorecard.md: the quick scorecard (optimiser experiments: rewritten by `make docs` only)."""
+    from .scorecard.cli import quick_markdown
+
+    return quick_markdown()
+
+
 # ---- the block machinery ------------------------------------------------------------------------
 def blocks(text: str) -> list[tuple[str, str]]:
     """(name, current body) of every figures block of a page."""

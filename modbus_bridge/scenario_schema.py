@@ -20,6 +20,7 @@ from typing import Annotated, Any, Literal, Union
 
 from pydantic import (
     BaseModel,
+    BeforeValidator,
     ConfigDict,
     Field,
     StrictBool,
@@ -29,6 +30,7 @@ from pydantic import (
     model_validator,
 )
 from pydantic import ValidationError as ValidationError  # re-exported for scenario.py
+from pydantic_core import PydanticCustomError
 
 from .plants import PLANT_MODELS
 
@@ -73,6 +75,20 @@ class _Strict(BaseModel):
 
 
 # ---- plants -------------------------------------------------------------------------------------
+def _number_list(value: Any) -> list[float]:
+    ok = isinstance(value, list) and value and all(
+        isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in value
+    )
+    if not ok:
+        raise PydanticCustomError(
+            "number_list", "must be a non-empty list of finite numbers, got {value}", {"value": repr(value)}
+        )
+    return [float(v) for v in value]
+
+
+NumberList = Annotated[list[float], BeforeValidator(_number_list)]
+
+
 def _plant_field(name: str, annotation: Any) -> Any:
     if name in POSITIVE_PLANT_FIELDS or "heat_capacity" in name or (
         name.endswith("_time_s") and name != "dead_time_s"
@@ -82,7 +98,7 @@ def _plant_field(name: str, annotation: Any) -> Any:
         return NonNegative
     origin = typing.get_origin(annotation)
     if origin in (list, tuple):
-        return list[Finite]
+        return NumberList
     return Finite
 
 

@@ -33,6 +33,7 @@ from .sensors import SENSOR_FAULTS
 DEFAULT_PORT = 5020
 DEFAULT_SCENARIO = "t4_tclab"  # two zones (TCLab twin heater): both application zones have a plant
 RETRY_S = 0.5  # pause between reconnection attempts while the PLC does not answer
+PV_SEQ_WRAP = 2**31 - 1  # the heartbeat register is a DINT
 STARTUP_SCANS = 3  # the application takes its parameters on its first scan: write after it
 CATCH_UP_S = 1.0  # wall time the plant makes up after a stall; longer stalls are skipped
 HELP = (
@@ -75,6 +76,7 @@ class PlantSim:
             )
         self.read_names = [z.binding["y"] for z in self.zones]
         self.t = 0.0
+        self.pv_seq = 0
 
     def configuration(self) -> dict:
         """Writes made once: PV path selection, raw sensor constants, each zone's first-phase writes."""
@@ -92,12 +94,15 @@ class PlantSim:
     def measure(self, dt: float) -> dict:
         temps = self.plant.temperatures()
         writes: dict = {}
+        self.pv_seq = self.pv_seq % PV_SEQ_WRAP + 1
         for z in self.zones:
             z.pv = z.sensor.measure(temps[z.channel], dt)
             if z.raw:
                 writes[z.binding["pv_raw"]] = z.sensor.last_counts
             else:
                 writes[z.binding["pv"]] = z.pv
+            if z.binding.has("pv_seq"):  # heartbeat with every new PV (the PLC's stale-PV watchdog)
+                writes[z.binding["pv_seq"]] = self.pv_seq
         return writes
 
     def apply(self, outputs: dict, dt: float) -> None:

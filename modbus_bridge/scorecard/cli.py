@@ -52,10 +52,26 @@ def command_line(args: argparse.Namespace) -> str:
     return " ".join(parts)
 
 
-def update_markdown(path: Path, cards: list[Card], command: str) -> None:
+def cards_markdown(cards: list[Card], command: str) -> str:
     from .report import card_markdown
 
-    body = f"Produced by `{command}`.\n\n" + "\n".join(card_markdown(c, None) for c in cards)
+    return f"Produced by `{command}`.\n\n" + "\n".join(card_markdown(c, None) for c in cards)
+
+
+def quick_markdown() -> str:
+    """The `figures:scorecard` block: `thermost scorecard --quick` (the docs producer)."""
+    from ..optimise.executor import make_executor
+    from ..scenario import load_scenario, resolve_scenario
+    from .build import build_card
+
+    with make_executor() as executor:
+        scenarios = [load_scenario(resolve_scenario(n)) for n in QUICK_SCENARIOS]
+        cards = [build_card(sc, executor, QUICK_EVALS) for sc in scenarios]
+    return cards_markdown(cards, "thermost scorecard --quick")
+
+
+def update_markdown(path: Path, cards: list[Card], command: str) -> None:
+    body = cards_markdown(cards, command)
     text = path.read_text(encoding="utf-8") if path.exists() else ""
     block = f"<!-- figures:scorecard -->\n{body}<!-- /figures:scorecard -->"
     if BLOCK.search(text):

@@ -59,9 +59,9 @@ def test_store_keeps_history_and_prunes_by_age_and_rows(tmp_path) -> None:
 
 def test_alarm_and_error_texts_come_from_the_library_reference() -> None:
     texts = alarm_texts()
-    assert texts[0].startswith("sensor open") and texts[5] == "heater open" and texts[17] == "tuning error"
-    assert "fTempLowLow" in texts[9]
-    assert describe_bits(1 | 1 << 16, texts) == [(0, texts[0]), (16, "parameter error")]
+    assert texts[0].startswith("sensor open") and texts[5].startswith("heater open circuit")
+    assert texts[17].startswith("tuning error") and "fTempLowLow" in texts[9] and 22 in texts
+    assert describe_bits(1 | 1 << 16, texts) == [(0, texts[0]), (16, texts[16])]
     assert "TUNE: timeout" in error_texts()[13]
 
 
@@ -147,7 +147,8 @@ def test_simulate_plant_commands() -> None:
     assert [z.plc_zone for z in sim.zones] == [1, 2]
     assert sim.configuration()["fYMinZone2"] == 0.0  # zone 2's first-phase writes
     writes = sim.measure(0.5)
-    assert set(writes) == {"fPvZone1", "fPvZone2"}
+    assert set(writes) == {"fPvZone1", "fPvZone2", "nPvSeqZone1", "nPvSeqZone2"}
+    assert sim.measure(0.5)["nPvSeqZone1"] == writes["nPvSeqZone1"] + 1  # heartbeat with every new PV
     assert "sensor: open" in sim.command("fault 1 open")
     assert sim.measure(0.5)["fPvZone1"] != pytest.approx(writes["fPvZone1"], abs=5)
     assert "load: 5" in sim.command("load 2 5")

@@ -17,21 +17,28 @@ from .conftest import run_scenario
 
 QUICK = {"seed003_hotend_fuzzy": "PID (self-tuned)", "t3_marlin_hotend": None}
 NOT_NOMINAL = ("seed003_sensor_fault",)  # the fault-injection scenario
-# seed 000 tunes its cooling side with fYTuneZone2 = -50 written together with mode TUNE; the application
-# applies a parameter write one scan after the mode, so TUNE starts with the old step and stops with error 15
-KNOWN_BROKEN = {"seed000_forming_platform": "TUNE error 15: fYTune arrives one scan after the mode"}
+# goals not met yet: skipped in CI with the reason, expected failures with THERMOST_SLOW=1
+SHORTFALLS = {"nlag_oven": "the 4-lag oven latches an alarm during its nominal programme"}
 
 
 def names():
     return [p.stem for p in shipped_scenarios() if p.stem not in NOT_NOMINAL]
 
 
-@pytest.mark.parametrize("name", names())
+def cases():
+    for name in names():
+        marks = [pytest.mark.xfail(reason=f"known shortfall: {SHORTFALLS[name]}", strict=True)] \
+            if name in SHORTFALLS else []
+        yield pytest.param(name, marks=marks)
+
+
+@pytest.mark.parametrize("name", list(cases()))
 def test_nominal_scenario_raises_no_alarm(harness, name):
+    if name in SHORTFALLS and not os.environ.get("THERMOST_SLOW"):
+        why = SHORTFALLS[name]
+        pytest.skip(f"known shortfall, {name}: {why} (THERMOST_SLOW=1 runs it as an expected failure)")
     if name not in QUICK and not os.environ.get("THERMOST_SLOW"):
         pytest.skip(f"{name}: full nominal sweep with THERMOST_SLOW=1 (CI time)")
-    if name in KNOWN_BROKEN:
-        pytest.skip(f"{name}: {KNOWN_BROKEN[name]}")
     sc = load_scenario(resolve_scenario(name))
     if QUICK.get(name) and not os.environ.get("THERMOST_SLOW"):
         sc = dataclasses.replace(sc, variants=[v for v in sc.variants if v.name == QUICK[name]])

@@ -104,7 +104,7 @@ def zone_decls(table: list[dict[str, str]], z: Zone) -> tuple[list[str], list[st
     cfg = [r for r in rows_of(table, z, "coil") if wire(r)[0] == "cfg" and r["default"]]
     defaults = ", ".join(
         f"{wire(r)[1]} := {st_literal(zone_default(r, z), r['type'])}"
-        for r in params + cfg if wire(r)[0] in ("param", "cfg") and r["type"] != "DWORD"
+        for r in params + cfg if wire(r)[0] in ("param", "cfg") and r["type"] == "REAL"
     )
     sync_blocks = [
         f"    {sync_block(r, n)} : {'FB_ParamSyncReal' if r['type'] == 'REAL' else 'FB_ParamSyncDword'};"
@@ -135,7 +135,7 @@ def zone_init(table: list[dict[str, str]], z: Zone) -> list[str]:
     """First scan: modes off, coils to their defaults; the other client registers only on a blank store."""
     n = z.n
     lines = [f"    nModeZone{n} := 0;"]
-    # MatIEC refuses DWORD values in a structure initialiser: these parameters start here instead
+    # MatIEC refuses DWORD and BOOL values in a structure initialiser: these start here instead
     lines += [f"    sParZone{n}.{wire(r)[1]} := {st_literal(zone_default(r, z), r['type'])};"
               for r in rows_of(table, z, "md") if wire(r)[0] == "param" and r["type"] == "DWORD"]
     kept = []
@@ -171,7 +171,7 @@ def status_lines(table: list[dict[str, str]], z: Zone) -> list[str]:
             out.append(f"  {r['name']}Zone{n} := fbFuzzyZone{n}.{field};")
         elif kind == "out":
             out.append(f"  {r['name']}Zone{n} := fbZone{n}.{field};")
-        elif kind == "inuse":
+        elif kind in ("inuse", "param"):
             out.append(f"  {r['name']}Zone{n} := fbZone{n}.sValid.{field};")
         elif kind == "cfg":
             out.append(f"  {r['name']}Zone{n} := fbZone{n}.sValid.{field};")

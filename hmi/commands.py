@@ -5,13 +5,14 @@ from __future__ import annotations
 import argparse
 
 from plc.cli import lazy_handler as _lazy
+from plc.cli import port_number
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("hmi", help="web operator panel over Modbus TCP (http://127.0.0.1:8080/)")
     p.add_argument("--plc", default="127.0.0.1:5020", metavar="HOST:PORT",
                    help="the PLC (default 127.0.0.1:5020, `thermost simulate`)")
-    p.add_argument("--port", type=int, default=8080, help="HTTP port of the panel (default 8080)")
+    p.add_argument("--port", type=port_number, default=8080, help="HTTP port of the panel (default 8080)")
     p.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1)")
     p.add_argument("--data", default="data", metavar="DIR",
                    help="data folder: hmi.sqlite (history, alarms, audit), hmi-access.toml (default data/)")

@@ -8,7 +8,7 @@ from __future__ import annotations
 import argparse
 
 from plc.cli import lazy_handler as _lazy
-from plc.cli import positive_float
+from plc.cli import port_number, positive_float
 
 from .optimise.cli import add_arguments as _optimise_args
 from .scorecard.cli import add_arguments as _scorecard_args
@@ -67,9 +67,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser("simulate", help="a scenario's plant in closed loop with the soft-PLC, live")
     p.add_argument("scenario", nargs="?", help="scenario .toml or shipped name (default: t4_tclab, 2 zones)")
-    p.add_argument("--port", type=int, default=5020, help="Modbus TCP port of the soft-PLC (default 5020)")
+    p.add_argument("--port", type=port_number, default=5020,
+                   help="Modbus TCP port of the soft-PLC (default 5020)")
     p.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1)")
-    p.add_argument("--speed", type=float, default=1.0, metavar="S", help="plant and PLC run S x real time")
+    p.add_argument("--speed", type=positive_float, default=1.0, metavar="S",
+                   help="plant and PLC run S x real time")
     p.add_argument("--plc", metavar="HOST:PORT", help="run only the plant, against this PLC")
     p.set_defaults(handler=_lazy("modbus_bridge.simulate:main_simulate"))
 

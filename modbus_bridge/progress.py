@@ -105,3 +105,79 @@ class RunProgress:
         if self._progress is not None:
             self._progress.stop()
             self._progress = None
+
+
+class CountProgress:
+    """A counted bar (experiments, scenarios) in the same style as `thermost run`'s:
+    `with CountProgress("optimise seed003", total=40, unit="exp") as p: p.advance(note="best J 1.2")`.
+    Plain lines when stderr is not a terminal; nothing when disabled."""
+
+    def __init__(self, description: str, total: int, unit: str, *, enabled: bool = True,
+                 stream: TextIO | None = None, terminal: bool | None = None) -> None:
+        self.description = description
+        self.total = total
+        self.unit = unit
+        self.enabled = enabled
+        self.stream = stream if stream is not None else sys.stderr
+        isatty = getattr(self.stream, "isatty", lambda: False)
+        self.terminal = isatty() if terminal is None else terminal
+        self.done = 0
+        self.note = ""
+        self._progress = None
+        self._task = None
+        self._last_line = 0.0
+
+    def __enter__(self) -> CountProgress:
+        if self.enabled and self.terminal:
+            from rich.console import Console
+            from rich.progress import (
+                BarColumn,
+                MofNCompleteColumn,
+                Progress,
+                TextColumn,
+                TimeElapsedColumn,
+                TimeRemainingColumn,
+            )
+
+            self._progress = Progress(
+                TextColumn("[bold]{task.description}"),
+                BarColumn(bar_width=30),
+                MofNCompleteColumn(),
+                TextColumn(self.unit),
+                TimeElapsedColumn(),
+                TimeRemainingColumn(),
+                TextColumn("{task.fields[note]}"),
+                console=Console(file=self.stream),
+                transient=False,
+            )
+            self._progress.start()
+            self._task = self._progress.add_task(self.description, total=self.total, note="")
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self._progress is not None:
+            self._progress.stop()
+            self._progress = None
+
+    def advance(self, step: int = 1, note: str | None = None) -> None:
+        self.done += step
+        if note is not None:
+            self.note = note
+        if not self.enabled:
+            return
+        if self._progress is not None:
+            self._progress.update(self._task, advance=step, note=self.note)
+            return
+        now = time.monotonic()
+        if now - self._last_line < PLAIN_EVERY_S and self.done < self.total:
+            return
+        self._last_line = now
+        tail = f", {self.note}" if self.note else ""
+        self.stream.write(f"thermost: {self.description}: {self.done}/{self.total} {self.unit}{tail}\n")
+        self.stream.flush()
+
+    def describe(self, note: str) -> None:
+        """Change the note without advancing (e.g. the scenario now being scored)."""
+        self.note = note
+        if self._progress is not None:
+            self._progress.update(self._task, note=note)

@@ -10,7 +10,7 @@ import logging
 from pathlib import Path
 
 from modbus_bridge.binding import ControllerCodes
-from modbus_bridge.progress import RunProgress, quiet_libraries
+from modbus_bridge.progress import CountProgress, RunProgress, quiet_libraries
 from modbus_bridge.regmap import load_register_map
 from modbus_bridge.runner import HarnessSetup, run_variants
 from modbus_bridge.scenario import Variant, load_scenario
@@ -69,3 +69,27 @@ def test_library_logs_only_with_verbose():
     quiet_libraries(True)
     assert logging.getLogger("pymodbus").isEnabledFor(logging.ERROR)
     quiet_libraries(False)
+
+
+def test_counted_progress_plain_lines_end_with_the_total_and_the_note():
+    stream = io.StringIO()
+    with CountProgress("optimise seed003", total=3, unit="experiments", stream=stream, terminal=False) as bar:
+        for j in (3.0, 2.0, 2.5):
+            bar.advance(note=f"best J {j}")
+    lines = stream.getvalue().splitlines()
+    assert lines[-1] == "thermost: optimise seed003: 3/3 experiments, best J 2.5"
+    assert "\r" not in stream.getvalue()
+
+
+def test_counted_progress_draws_a_bar_on_a_terminal_and_nothing_when_quiet():
+    stream = io.StringIO()
+    with CountProgress("scorecard", total=2, unit="scenarios", stream=stream, terminal=True) as bar:
+        bar.describe("seed003_hotend_fuzzy")
+        bar.advance()
+        bar.advance()
+    assert "2/2" in stream.getvalue() and "scorecard" in stream.getvalue()
+    quiet = io.StringIO()
+    with CountProgress("scorecard", total=2, unit="scenarios", enabled=False, stream=quiet,
+                       terminal=False) as bar:
+        bar.advance()
+    assert quiet.getvalue() == ""

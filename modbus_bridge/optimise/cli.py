@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import sys
 import time
 from pathlib import Path
 
@@ -51,9 +50,8 @@ def _check(args: argparse.Namespace) -> None:
 
 
 def main_optimise(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
-
     from ..client import PlcError
+    from ..progress import CountProgress
     from ..scenario import ScenarioError, load_scenario, resolve_scenario
     from .executor import ExecutorError, make_executor
     from .search import Optimiser, Settings
@@ -81,24 +79,20 @@ def main_optimise(args: argparse.Namespace) -> int:
     except ValueError as exc:
         executor.close()
         raise UserError(f"{scenario.name}: {exc}") from None
-    bar = tqdm(
-        total=args.evals, desc=f"optimise {scenario.name}", unit="exp", disable=args.quiet, file=sys.stderr
-    )
+    bar = CountProgress(f"optimise {scenario.name}", total=args.evals, unit="experiments",
+                        enabled=not args.quiet)
     best = [math.inf]
 
     def on_eval(ev) -> None:
         best[0] = min(best[0], ev.objective)
-        bar.set_postfix_str(f"best J {best[0]:.4g}")
-        bar.update(1)
+        bar.advance(note=f"best J {best[0]:.4g}")
 
     opt.on_eval = on_eval
     try:
-        with executor:
+        with executor, bar:
             result = opt.run()
     except PlcError as exc:
         raise UserError(str(exc)) from None
-    finally:
-        bar.close()
     b = result.best
     doc = {
         "scenario": scenario.name,

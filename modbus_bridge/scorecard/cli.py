@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import re
-import sys
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -83,10 +82,9 @@ def update_markdown(path: Path, cards: list[Card], command: str) -> None:
 
 
 def main_scorecard(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
-
     from ..client import PlcError
     from ..optimise.executor import ExecutorError, make_executor
+    from ..progress import CountProgress
     from ..scenario import ScenarioError, load_scenario, resolve_scenario, shipped_scenarios
     from .build import Card, build_card
     from .report import card_markdown, write_reports
@@ -109,10 +107,10 @@ def main_scorecard(args: argparse.Namespace) -> int:
     cards = []
     with (
         executor,
-        tqdm(scenarios, desc="scorecard", unit="scenario", disable=args.quiet, file=sys.stderr) as bar,
+        CountProgress("scorecard", total=len(scenarios), unit="scenarios", enabled=not args.quiet) as bar,
     ):
-        for sc in bar:
-            bar.set_postfix_str(sc.name)
+        for sc in scenarios:
+            bar.describe(sc.name)
             try:
                 cards.append(build_card(sc, executor, evals))
             except PlcError as exc:
@@ -120,6 +118,7 @@ def main_scorecard(args: argparse.Namespace) -> int:
             except ValueError as exc:  # e.g. a plant that cannot be held at the setpoint
                 card = Card(sc, skipped=f"cannot be scored: {exc}")
                 cards.append(card)
+            bar.advance()
     command = command_line(args)
     written = write_reports(cards, Path(args.out), command)
     for card in cards:

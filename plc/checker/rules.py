@@ -45,6 +45,9 @@ COMPOUND_STATEMENTS = {
     "repeat_statement": "END_REPEAT",
     "case_statement": "END_CASE",
 }
+# iec2c crashes on one declaration of three or more function block instances (probed on OpenPLC v3's
+# iec2c: `t1, t2 : TON;` compiles, `t1, t2, t3 : TON;` ends with a segmentation fault)
+MAX_FB_NAMES_PER_DECLARATION = 2
 # iec2c refuses real literals far outside the binary32 range, even for LREAL ("Numerical value exceeds
 # range for LREAL data type"). Evidence (conformance README + corpus): 1.0E39, 1.0E-40, 1.0E308 refused;
 # 1.0E-38 (binary32 subnormal) and 3.4028235677973366E38 (FLT_MAX + half an ulp) accepted. The limits
@@ -407,6 +410,7 @@ class FileChecker:
             if section in ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT") and "CONSTANT" in quals:
                 self.report(block, f"{section} CONSTANT is TwinCAT-only; MatIEC refuses it")
             variables = block_variables(block, ps)
+            self.multi_instance_rule(block)
             located = [v for v in variables if v.located]
             if located and pou.kind != "PROGRAM":
                 for var in located:
@@ -437,6 +441,22 @@ class FileChecker:
                 name_node, f"{pou.kind} '{pou.name}' has an empty body; MatIEC needs at least one statement"
             )
         self.body_rules(pou, body)
+
+    def multi_instance_rule(self, block: Node) -> None:
+        """iec2c (OpenPLC v3) ends with a segmentation fault on one declaration of three or more
+        function block instances (`a, b, c : TON;`) once the POU is instantiated in a CONFIGURATION
+        (as every OpenPLC program is); two names, or one per line, compile."""
+        for decl in block.named_children:
+            if decl.type != "variable_declaration":
+                continue
+            names = [n for n in decl.children_by_field_name("names") if n.type == "identifier"]
+            vtype = self.symbols.resolve(type_of(decl.child_by_field_name("type"), self.ps))
+            if len(names) >= MAX_FB_NAMES_PER_DECLARATION + 1 and self.symbols.is_fb_type(vtype):
+                self.report(
+                    names[0],
+                    f"{len(names)} function block instances in one declaration crash MatIEC's iec2c "
+                    "(segmentation fault); declare one instance per line",
+                )
 
     def body_rules(self, pou: Pou, body: list[Node]) -> None:
         typer = ExpressionTyper(self.symbols, pou, self.report)
@@ -484,10 +504,38 @@ class FileChecker:
                 ftype = self.symbols.resolve(typer.member_type(vtype, self.ps.node_text(name)))
                 if isinstance(ftype, str):
                     self.initial_value_rule(typer, ftype, value)
+                    self.member_lookup_rule(typer, vtype, self.ps.node_text(name), ftype, value)
             return
         why = compatibility(vtype, self.symbols.resolve(typer.type(init)))
         if why:
             self.report(init, f"incompatible initial value: {why}")
+
+    def member_lookup_rule(self, typer: ExpressionTyper, struct: str, member: str, mtype: str,
+                           value: Node) -> None:
+        """iec2c checks the value of `member := value` in a structure initialiser against the first
+        member, in declaration order, whose upper-case name is not below MEMBER's: a search that
+        assumes the members are sorted by name. When that is another member of another type, the
+        value is judged against the wrong type (a real literal for a member found as INT is refused,
+        an enumerated value ends in an internal compiler error). Members declared in alphabetical
+        order, or set in code, avoid it."""
+        decl = self.symbols.types.get(struct)
+        if decl is None or decl.kind != "struct":
+            return
+        key = member.upper()
+        found = next((name for name in decl.fields if name >= key), key)
+        ftype = self.symbols.resolve(decl.fields.get(found))
+        if found == key or not isinstance(ftype, str) or ftype == mtype:
+            return
+        vtype = self.symbols.resolve(typer.type(value))
+        why = compatibility(ftype, vtype)
+        enum_value = isinstance(vtype, str) and vtype in self.symbols.types and vtype != ftype
+        if why or enum_value:
+            self.report(
+                value,
+                f"iec2c checks the initial value of '{member}' against member '{found}' ({ftype}), the "
+                "first member at or after it in alphabetical order, and refuses it; declare the "
+                "members in alphabetical order or set this one in code",
+            )
 
     def undeclared_target_rule(self, pou: Pou, target: Node) -> None:
         name = self.ps.node_text(target).upper()

@@ -619,7 +619,8 @@ class FileChecker:
                 if name is not None:
                     declared.append((name, node.type))
             elif node.type == "variable_declaration":
-                declared.extend((n, "variable") for n in node.children_by_field_name("names"))
+                names = node.children_by_field_name("names")
+                declared.extend((n, "variable") for n in names if n.type == "identifier")
         seen: set[int] = set()
         for name_node, kind in declared:
             name = self.ps.node_text(name_node)

@@ -143,7 +143,7 @@ def block_variables(block: Node, ps: ParsedSource) -> list[VarInfo]:
             continue
         vtype = type_of(decl.child_by_field_name("type"), ps)
         located = decl.child_by_field_name("address") is not None
-        for name in decl.children_by_field_name("names"):
+        for name in (n for n in decl.children_by_field_name("names") if n.type == "identifier"):
             out.append(VarInfo(ps.node_text(name), vtype, section, constant, located, name))
     return out
 

@@ -49,7 +49,6 @@ SHORTFALLS = {
     ("seed000_forming_platform", "heater_open"): SEED000_SLOW_PLANT,
     ("seed000_forming_platform", "sensor_detached"): SEED000_SLOW_PLANT,
     ("seed000_forming_platform", "stuck_on"): SEED000_SLOW_PLANT,
-    ("seed003_hotend_fuzzy", "heater_weak"): "a 30 % weak heater is classified later than L + 5 s",
 }
 
 
@@ -94,14 +93,7 @@ def test_fault_is_detected_and_the_heater_goes_off(harness, plant, fault):
     check(harness, plant, fault)
 
 
-@pytest.mark.parametrize(
-    "fault",
-    [
-        pytest.param("heater_weak", marks=pytest.mark.xfail(
-            reason=f"known shortfall: {SHORTFALLS[('seed003_hotend_fuzzy', 'heater_weak')]}", strict=True)),
-        "sensor_falling_off",
-    ],
-)
+@pytest.mark.parametrize("fault", ["heater_weak", "sensor_falling_off"])
 def test_partial_faults_on_seed003(harness, fault):
     shortfall("seed003_hotend_fuzzy", fault)
     if not os.environ.get(SLOW_ENV):

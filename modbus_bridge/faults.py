@@ -10,6 +10,7 @@ class after the fault), the time the output went to 0 and stayed there, and the 
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
 from dataclasses import dataclass, field
@@ -295,3 +296,27 @@ async def run_mismatch(name: str, time_constant_scale: float, dead_time_scale: f
         async with PlcClient("127.0.0.1", soft.port, setup.regmap, name="soft-PLC") as client:
             return await _run_on(client, sc, MISMATCH, setup, 0.0, after_s, True, scale=scale,
                                  programme=programme)
+
+
+def open_loop_departure(name: str, fault: str, y0: float, after_s: float, rest_s: float = 40000.0) -> float:
+    """Detection bound: how far the true temperature of scenario `name`'s plant departs, `after_s` after an
+    actuator fault, from where it would be without it, open loop from rest at the output `y0` (%). A check
+    on the PV cannot see less than this (compare with the sensor's count and noise)."""
+    sc = load_scenario(resolve_scenario(name))
+    if fault not in ("heater_open", "heater_weak", "stuck_on"):
+        raise ValueError(f"{fault!r} is not an actuator fault")
+    faulted = {"heater_open": 0.0, "heater_weak": y0 * WEAK_FRACTION, "stuck_on": STUCK_ON_PCT}[fault]
+    plant = sc.build_plant()
+    dist = PlantDisturbance.for_channels(plant.channels)
+    channel = sc.zones[0].channel
+    u = [0.0] * plant.channels
+    u[channel] = y0
+    for _ in range(round(rest_s / sc.dt_s)):
+        plant.step(u, sc.dt_s, dist)
+    other, other_dist = copy.deepcopy(plant), copy.deepcopy(dist)
+    u_fault = list(u)
+    u_fault[channel] = faulted
+    for _ in range(round(after_s / sc.dt_s)):
+        plant.step(u, sc.dt_s, dist)
+        other.step(u_fault, sc.dt_s, other_dist)
+    return other.temperatures()[channel] - plant.temperatures()[channel]

@@ -243,16 +243,20 @@ def firmware_rules(run, sc) -> dict[str, float | None]:
 
 
 def fault_table() -> None:
-    from .faults import FAULTS, run_fault
+    import numpy as np
+
+    from .faults import FAULTS, open_loop_departure, run_fault
 
     def fmt(v) -> str:
         if v is None:
             return "never"
         return "n/a" if v != v else f"{v:.1f}"
 
-    print("fault detection (s after the fault; off = output 0 for good; peak = true temperature after it):")
+    print("fault detection (s after the fault; off = output 0 for good; peak = true temperature after it;")
+    print("  dPV@L+5 = how far an actuator fault moves the true temperature by L + 5 s, open loop from rest")
+    print("  at the output before the fault: the most any PV-based check can see by then):")
     print(f"  {'plant':26s} {'fault':19s} {'L':>5s} {'detect':>7s} {'off':>7s} {'peak':>7s} "
-          f"{'RRF':>7s} {'Marlin':>7s} {'Prusa':>7s}")
+          f"{'RRF':>7s} {'Marlin':>7s} {'Prusa':>7s} {'dPV@L+5':>8s}")
     for name in FAULT_PLANTS:
         sc = load_scenario(resolve_scenario(name))
         for fault in FAULTS:
@@ -262,9 +266,15 @@ def fault_table() -> None:
                 print(f"  {name:26s} {fault:19s} not measured ({type(exc).__name__}: {exc})")
                 continue
             rules = firmware_rules(run, sc)
+            bound = "-"
+            if fault in ("heater_open", "heater_weak", "stuck_on"):
+                t, y = np.asarray(run.t), np.asarray(run.y)
+                y0 = float(np.mean(y[(t < run.t_fault) & (t >= run.t_fault - 10.0)]))
+                moved = open_loop_departure(name, fault, y0, run.dead_time_s + 5.0)
+                bound = f"{moved:+.4f}"
             print(f"  {name:26s} {fault:19s} {run.dead_time_s:5.1f} {fmt(run.detection_s()):>7s} "
                   f"{fmt(run.off_s()):>7s} {run.peak_c():7.1f} {fmt(rules['RRF']):>7s} "
-                  f"{fmt(rules['Marlin']):>7s} {fmt(rules['Prusa']):>7s}", flush=True)
+                  f"{fmt(rules['Marlin']):>7s} {fmt(rules['Prusa']):>7s} {bound:>8s}", flush=True)
 
 
 def maybe_fault_table() -> None:

@@ -10,6 +10,7 @@ class after the fault), the time the output went to 0 and stayed there, and the 
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
 from dataclasses import dataclass, field
@@ -43,6 +44,21 @@ FAULT_ALARMS: dict[str, tuple[str, ...]] = {
     "stale_pv": ("pv_stale",),
 }
 FAULTS = tuple(FAULT_ALARMS)
+MISMATCH = "model_mismatch"  # not a fault: the plant's T and L change after tuning; every alarm bit counts
+
+
+@dataclass(frozen=True)
+class ProgrammeStep:
+    """A step of the nominal programme that follows the injection: setpoint offset and load change."""
+
+    after_s: float  # plant seconds after the injection
+    setpoint_delta_c: float = 0.0  # setpoint = the tuning setpoint + this
+    load_pct: float = 0.0  # extra heat loss added at this step, % of full power
+
+
+# a nominal programme for the mismatch runs: hold, setpoint 20 degC down and back, load step
+MISMATCH_PROGRAMME = (ProgrammeStep(150.0, -20.0), ProgrammeStep(400.0, 0.0), ProgrammeStep(600.0, 0.0, 8.0))
+MISMATCH_AFTER_S = 800.0
 
 
 @dataclass
@@ -65,6 +81,8 @@ class FaultRun:
 
     @property
     def mask(self) -> int:
+        if self.fault == MISMATCH:
+            return (1 << 32) - 1
         bits = alarm_bits()
         return sum(1 << bits[name].bit for name in FAULT_ALARMS[self.fault] if name in bits)
 
@@ -98,7 +116,7 @@ class FaultRun:
 class _FaultedZone:
     """The plant and sensor of one zone with the fault applied at the plant/sensor boundary."""
 
-    def __init__(self, sc: Scenario, fault: str) -> None:
+    def __init__(self, sc: Scenario, fault: str, scale: tuple[float, float] = (1.0, 1.0)) -> None:
         self.sc = sc
         self.zone = sc.zones[0]
         self.fault = fault
@@ -109,6 +127,7 @@ class _FaultedZone:
         self.t_fault = math.nan
         self.reading_at_fault = math.nan
         self.frozen: tuple[float, int] | None = None
+        self.scale = scale  # model mismatch: plant time constant and dead time times these
         self.u = [0.0] * self.plant.channels
 
     def true_c(self) -> float:
@@ -131,6 +150,10 @@ class _FaultedZone:
         self.active = True
         self.t_fault = t
         self.reading_at_fault = self.true_c()
+        if self.fault == MISMATCH:
+            t_scale, l_scale = self.scale
+            self.plant.time_constant_scale = t_scale  # type: ignore[attr-defined]
+            self.plant.set_dead_time(self.plant.dead_time_s * l_scale)  # type: ignore[attr-defined]
 
     def step(self, y: float, dt: float) -> None:
         u = y
@@ -152,8 +175,10 @@ def _dead_time_s(sc: Scenario, plant) -> float:
 
 
 async def _run_on(client: PlcClient, sc: Scenario, fault: str, setup: HarnessSetup, settle_s: float,
-                  after_s: float, stepped: bool, on_step=None) -> FaultRun:
-    fz = _FaultedZone(sc, fault)
+                  after_s: float, stepped: bool, on_step=None, scale: tuple[float, float] = (1.0, 1.0),
+                  programme: tuple[ProgrammeStep, ...] = ()) -> FaultRun:
+    fz = _FaultedZone(sc, fault, scale)
+    pending = sorted(programme, key=lambda p: p.after_s)
     b: ZoneBinding = resolve_zone(setup.regmap, fz.zone.plc_zone)
     codes = setup.codes
     run = FaultRun(scenario=sc.name, fault=fault, dead_time_s=_dead_time_s(sc, fz.plant))
@@ -192,6 +217,10 @@ async def _run_on(client: PlcClient, sc: Scenario, fault: str, setup: HarnessSet
             run.t_fault = t
         pv = fz.measure(t, dt if k else 0.0)
         step_writes: dict = {}
+        while fz.active and pending and t >= run.t_fault + pending[0].after_s:
+            item = pending.pop(0)
+            step_writes[b["setpoint"]] = tune.setpoint_c + item.setpoint_delta_c
+            fz.pdist.zones[fz.zone.channel].load_pct += item.load_pct
         if not (fz.active and fault == "stale_pv"):
             seq = (seq + 1) % HEARTBEAT_MODULO
             step_writes[b["pv_raw"] if raw else b["pv"]] = fz.sensor.last_counts if raw else pv
@@ -241,3 +270,53 @@ async def run_fault(name: str, fault: str, setup: HarnessSetup | None = None, *,
                 return await _run_on(client, sc, fault, setup, settle_s, after_s, True,
                                      lambda t, run: on_step(t, run, app))
             return await _run_on(client, sc, fault, setup, settle_s, after_s, True)
+
+
+async def run_mismatch(name: str, time_constant_scale: float, dead_time_scale: float,
+                       setup: HarnessSetup | None = None, *, plc: str | None = None,
+                       programme: tuple[ProgrammeStep, ...] = MISMATCH_PROGRAMME,
+                       after_s: float = MISMATCH_AFTER_S) -> FaultRun:
+    """Tune on the nominal plant; the moment it is tuned the plant's T and L change by the given factors
+    (the controller's identified model is then off by that much) and the nominal programme runs. A first-
+    order-plus-dead-time plant (linear.Fopdt) is needed; detection_s() is the first alarm bit of any kind."""
+    setup = setup or HarnessSetup.default()
+    sc = load_scenario(resolve_scenario(name))
+    sc = dataclasses.replace(sc, zones=sc.zones[:1])
+    if not hasattr(sc.build_plant(), "set_dead_time"):
+        raise ValueError(f"{name}: the plant cannot change its dead time (an FOPDT plant is needed)")
+    scale = (time_constant_scale, dead_time_scale)
+    if plc is not None:
+        host, port = parse_host_port(plc)
+        async with PlcClient(host, port, setup.regmap, name="PLC") as client:
+            return await _run_on(client, sc, MISMATCH, setup, 0.0, after_s, await client.stepped(),
+                                 scale=scale, programme=programme)
+    from plc.runtime.server import SoftPlc
+
+    async with SoftPlc(setup.program_text(), host="127.0.0.1", port=0, stepped=True) as soft:
+        async with PlcClient("127.0.0.1", soft.port, setup.regmap, name="soft-PLC") as client:
+            return await _run_on(client, sc, MISMATCH, setup, 0.0, after_s, True, scale=scale,
+                                 programme=programme)
+
+
+def open_loop_departure(name: str, fault: str, y0: float, after_s: float, rest_s: float = 40000.0) -> float:
+    """Detection bound: how far the true temperature of scenario `name`'s plant departs, `after_s` after an
+    actuator fault, from where it would be without it, open loop from rest at the output `y0` (%). A check
+    on the PV cannot see less than this (compare with the sensor's count and noise)."""
+    sc = load_scenario(resolve_scenario(name))
+    if fault not in ("heater_open", "heater_weak", "stuck_on"):
+        raise ValueError(f"{fault!r} is not an actuator fault")
+    faulted = {"heater_open": 0.0, "heater_weak": y0 * WEAK_FRACTION, "stuck_on": STUCK_ON_PCT}[fault]
+    plant = sc.build_plant()
+    dist = PlantDisturbance.for_channels(plant.channels)
+    channel = sc.zones[0].channel
+    u = [0.0] * plant.channels
+    u[channel] = y0
+    for _ in range(round(rest_s / sc.dt_s)):
+        plant.step(u, sc.dt_s, dist)
+    other, other_dist = copy.deepcopy(plant), copy.deepcopy(dist)
+    u_fault = list(u)
+    u_fault[channel] = faulted
+    for _ in range(round(after_s / sc.dt_s)):
+        plant.step(u, sc.dt_s, dist)
+        other.step(u_fault, sc.dt_s, other_dist)
+    return other.temperatures()[channel] - plant.temperatures()[channel]

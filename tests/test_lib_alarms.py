@@ -91,6 +91,16 @@ def test_tolerance_bands_armed_after_reaching_band(uut: ScanDriver) -> None:
     assert ack(uut, 50.0) & 0xF00 == 0
 
 
+def test_tolerance_bands_arm_after_dead_times_on_a_slow_plant(uut: ScanDriver) -> None:
+    uut.set("sPar.fTu", 20.0)  # identified dead time: arm after MAX(30 s, 4 x 20 s) = 80 s in the band
+    uut.set("sPar.fFrozenTime", 0.0)  # a constant test input is no frozen sensor here
+    scan(uut, 20.0, n=5)
+    scan(uut, 49.0, n=round(60.0 / TS))  # longer than fBandArmTime, shorter than 4 dead times
+    assert scan(uut, 44.0) & 0xF00 == 0, "a swing through the band on a slow loop is no warning"
+    scan(uut, 49.0, n=round(85.0 / TS))  # the swing above restarted the time in the band
+    assert scan(uut, 44.0) & 0x300 == 0x100, "armed after 4 dead times in the band"
+
+
 def test_absolute_limits(uut: ScanDriver) -> None:
     check_latch_and_ack(uut, 0x1000, 160.0, 50.0)
     check_latch_and_ack(uut, 0x2000, -5.0, 50.0)

@@ -58,6 +58,13 @@ class DelayLine:
         self._frac = steps - self._whole
         self._buffer: deque[float] = deque([initial] * (self._whole + 2), maxlen=self._whole + 2)
 
+    def resized(self, delay_s: float, dt: float) -> DelayLine:
+        """A line of the new delay keeping this line's recent inputs (the oldest repeated when it grows)."""
+        line = DelayLine(delay_s, dt, initial=self._buffer[0])
+        for value in self._buffer:
+            line._buffer.append(value)
+        return line
+
     def push(self, value: float) -> float:
         """Push the newest input; return the input as seen `delay_s` later (interpolated)."""
         self._buffer.append(value)

@@ -58,6 +58,14 @@ class Fopdt(Plant):
             self._delay_dt = dt
         return self._delay.push(u)
 
+    def set_dead_time(self, dead_time_s: float) -> None:
+        """Model mismatch: the dead time changes in operation; the inputs already on their way stay."""
+        if dead_time_s < 0.0:
+            raise ValueError("dead time must be >= 0")
+        self.dead_time_s = dead_time_s
+        if self._delay is not None:
+            self._delay = self._delay.resized(dead_time_s, self._delay_dt)
+
     def step(self, u_pct: Sequence[float], dt: float, dist: PlantDisturbance) -> None:
         u = self.effective_inputs(u_pct, dist)[0] + self._u_rest
         ud = self._delayed(u, dt)

@@ -3,7 +3,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: run test test-newest docs bench lint bundle clean browser demo
+.PHONY: run test test-newest docs bench lint bundle clean browser demo fuzz
 
 $(STAMP): pyproject.toml
 	python3 -m venv $(VENV)
@@ -54,6 +54,10 @@ demo: $(STAMP)
 	@echo "panel: http://127.0.0.1:8080/  (Modbus TCP 127.0.0.1:5020; Ctrl-C stops both)"
 	@$(VENV)/bin/thermost simulate < /dev/null & sim=$$!; trap 'kill $$sim 2>/dev/null' EXIT INT TERM; \
 	  sleep 3; $(VENV)/bin/thermost hmi --plc 127.0.0.1:5020 --port 8080
+
+# the hostile-client test at a million writes (the suite runs 50,000): a few minutes, prints its counts
+fuzz: $(STAMP)
+	THERMOST_FUZZ_WRITES=1000000 $(VENV)/bin/pytest -q -s -p no:cacheprovider tests/acceptance/test_write_fuzz.py
 
 bench: $(STAMP)
 	$(VENV)/bin/thermost bench

@@ -1,4 +1,4 @@
-"""The adapter inside the OpenPLC application (P_ThermoST, zone block of plc/app/zone_body.st.in),
+"""The adapter inside the OpenPLC application (P_ThermoST, its zone block FB_TempZone),
 driven through its registers like an HMI / the harness would."""
 
 from __future__ import annotations

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import pytest
@@ -12,6 +13,7 @@ from tests.test_lib_sensors import cvd
 from tests.test_lib_tuner import Fopdt
 
 APP_DIR = REPO_ROOT / "plc" / "app"
+ZONE_BLOCK = REPO_ROOT / "st_lib" / "registers" / "FB_TempZone.st"
 IDLE, ACTIVE, TUNE = 0, 2, 5
 TS = 0.1
 
@@ -40,7 +42,7 @@ def close_loop(drv: ScanDriver, plant: Fopdt, seconds: float, zone: int = 1) -> 
         plant.step(drv.get(f"fYZone{zone}"))
 
 
-def test_generated_program_is_up_to_date() -> None:
+def generator():
     import importlib.util
     import sys
 
@@ -48,7 +50,29 @@ def test_generated_program_is_up_to_date() -> None:
     module = importlib.util.module_from_spec(spec)
     sys.modules["gen_application"] = module
     spec.loader.exec_module(module)
-    assert module.generate() == (APP_DIR / "P_ThermoST.st").read_text()
+    return module
+
+
+def test_generated_program_and_zone_block_are_up_to_date() -> None:
+    gen = generator()
+    assert gen.generate() == (APP_DIR / "P_ThermoST.st").read_text()
+    assert gen.zone_block(gen.read_table())[0] == ZONE_BLOCK.read_text()
+
+
+@pytest.mark.parametrize("zone", [1, 2])
+def test_every_register_of_a_zone_is_wired_once_to_its_zone_block(zone: int) -> None:
+    program = (APP_DIR / "P_ThermoST.st").read_text()
+    located = re.findall(rf"^\s+(\w+Zone{zone}) AT %", program, re.M)
+    call = re.search(rf"^  fbZone{zone}\((.*?)\);", program, re.M | re.S)
+    assert call, f"no call of zone {zone}'s block"
+    args = [a.split(" := ") for a in re.split(r",\s*", call.group(1).strip())]
+    wired = [(port, reg) for port, reg in args if reg in located]
+    assert sorted(reg for _, reg in wired) == sorted(located)  # each register once, none left out
+    assert all(reg == f"{port}Zone{zone}" for port, reg in wired)  # to the port of its own name
+    block = ZONE_BLOCK.read_text()
+    sections = re.findall(r"^  (VAR_INPUT|VAR_IN_OUT)\n(.*?)^  END_VAR", block, re.M | re.S)
+    ports = {name for _, text in sections for name in re.findall(r"^    (\w+) : ", text, re.M)}
+    assert {port for port, _ in wired} <= ports
 
 
 def test_located_variables_two_zones(plc: ScanDriver) -> None:
@@ -81,7 +105,7 @@ def test_register_write_reaches_controller_and_nan_is_rejected(plc: ScanDriver) 
     plc.set("fSetpointZone1", 60.0)
     plc.set("nModeZone1", ACTIVE)
     plc.scan(3)
-    assert plc.get("fbZone1.sValid.fKp") == 7.5
+    assert plc.get("fbZone1.fbCtrl.sValid.fKp") == 7.5
     assert plc.get("dwAlarmZone1") & 0x10000
     assert math.isfinite(plc.get("fYZone1"))
     plc.set("nModeZone1", 99)
@@ -107,10 +131,10 @@ def test_tune_through_registers_publishes_parameters(plc: ScanDriver) -> None:
     assert plc.get("fTgZone1") == pytest.approx(140.0, rel=0.1)
     assert plc.get("fKsZone1") == pytest.approx(3.4, rel=0.1)
     plc.scan()  # the register shows the value in use from the next scan on
-    assert plc.get("fKpZone1") == plc.get("fbZone1.sValid.fKp")
+    assert plc.get("fKpZone1") == plc.get("fbZone1.fbCtrl.sValid.fKp")
     assert plc.get("nTuneRuleUsedZone1") == 3  # tau = 0.04: SIMC
     plc.scan(5)
-    assert plc.get("fKpZone1") == plc.get("fbZone1.sValid.fKp")  # the register did not overwrite the result
+    assert plc.get("fKpZone1") == plc.get("fbZone1.fbCtrl.sValid.fKp")  # the register kept the result
 
 
 def test_raw_inputs_through_sensor_functions(plc: ScanDriver) -> None:
@@ -186,7 +210,7 @@ def test_refused_write_shows_value_in_use_and_latches_until_ack(plc: ScanDriver)
     plc.set("fKpZone1", -5.0)
     plc.scan(2)
     assert plc.get("fKpZone1") == pytest.approx(3.7)
-    assert plc.get("fbZone1.sValid.fKp") == pytest.approx(3.7)
+    assert plc.get("fbZone1.fbCtrl.sValid.fKp") == pytest.approx(3.7)
     plc.scan(3)
     assert plc.get("dwAlarmZone1") & 0x10000
     plc.set("bAckZone1", True)
@@ -198,7 +222,7 @@ def test_refused_write_shows_value_in_use_and_latches_until_ack(plc: ScanDriver)
 def test_accepted_write_is_used_and_shown(plc: ScanDriver) -> None:
     plc.set("fTnZone1", 61.5)
     plc.scan()
-    assert plc.get("fbZone1.sValid.fTn") == 61.5  # used in the scan after the write
+    assert plc.get("fbZone1.fbCtrl.sValid.fTn") == 61.5  # used in the scan after the write
     plc.scan()
     assert plc.get("fTnZone1") == 61.5
     assert not plc.get("dwAlarmZone1") & 0x10000
@@ -224,7 +248,7 @@ def test_restored_store_keeps_registers_and_starts_idle(plc: ScanDriver) -> None
         drv.set(name, value)
     drv.scan(3)
     assert drv.get("fKpZone1") == 9.25
-    assert drv.get("fbZone1.sValid.fKp") == 9.25
+    assert drv.get("fbZone1.fbCtrl.sValid.fKp") == 9.25
     assert drv.get("fTnZone1") == pytest.approx(44.0)
     assert drv.get("nModeZone1") == IDLE  # never restart into ACTIVE
 

@@ -11,13 +11,16 @@ is up to date.
 from __future__ import annotations
 
 import csv
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
 HERE = Path(__file__).parent
 OUT = HERE / "P_ThermoST.st"
 TABLE = HERE / "tags.tsv"
-BODY = HERE / "zone_body.st.in"
+BLOCK_TEMPLATE = HERE / "FB_TempZone.st.in"
+BLOCK = HERE.parents[1] / "st_lib" / "registers" / "FB_TempZone.st"
+LINE_WIDTH = 116
 MD_ZONE, MW_ZONE, FUZZY_MD, FUZZY_MD_ZONE, FUZZY_COIL_BYTE = 100, 20, 200, 50, 4
 META_KEYS = ("unit", "min", "max", "default", "dec", "enum", "owner", "group")
 
@@ -89,46 +92,15 @@ def wire(row: dict[str, str]) -> tuple[str, str]:
     return kind, field or row["name"]
 
 
-def sync_block(row: dict[str, str], n: int) -> str:
+def sync_block(row: dict[str, str]) -> str:
     """Instance name of a register's sync block (iec2c crashes on long multi-name FB declarations)."""
-    return f"fbSync{row['name'].lstrip('fdw')}Zone{n}"
+    return f"fbSync{row['name'].lstrip('fdw')}"
 
 
-def zone_decls(table: list[dict[str, str]], z: Zone) -> tuple[list[str], list[str]]:
-    """(located declarations, internal declarations) of zone z."""
-    n = z.n
-    loc = [f"    (* ---- zone {n}: {z.title} ---- *)"]
-    for r in rows_of(table, z, "md", "mw", "iw", "coil", "fuzzy_md", "fuzzy_coil"):
-        loc.append(declaration(r, f"{r['name']}Zone{n}", location(r, z), z))
-    params = rows_of(table, z, "md")
-    cfg = [r for r in rows_of(table, z, "coil") if wire(r)[0] == "cfg" and r["default"]]
-    defaults = ", ".join(
-        f"{wire(r)[1]} := {st_literal(zone_default(r, z), r['type'])}"
-        for r in params + cfg if wire(r)[0] in ("param", "cfg") and r["type"] == "REAL"
-    )
-    sync_blocks = [
-        f"    {sync_block(r, n)} : {'FB_ParamSyncReal' if r['type'] == 'REAL' else 'FB_ParamSyncDword'};"
-        for r in params if wire(r)[0] == "param"
-    ]
-    internal = [
-        f"    sParZone{n} : ST_ControllerParameter := ({defaults});",
-        f"    fbZone{n} : FB_TempController;",
-        f"    fXZone{n}, fResZone{n} : REAL;",
-        f"    nRawZone{n} : INT;",
-        f"    bRawOpenZone{n}, bRawShortZone{n} : BOOL;",
-        f"    eModeZone{n} : E_CtrlMode := eCTRL_MODE_IDLE;",
-        f"    bRejectedZone{n}, bOneRejectZone{n}, bParamRefusedZone{n} : BOOL;",
-        *sync_blocks,
-        f"    sFuzzyParZone{n} : ST_FuzzyParameter;",
-        f"    fbFuzzyZone{n} : FB_FuzzyGainAdapter;",
-        f"    bFuzzyInitZone{n}, bFuzzyLoadReqZone{n}, bFuzzyOkZone{n} : BOOL;",
-        f"    nFuzzyPresetLoadedZone{n} : DINT := -1;",
-        f"    fFuzzyTuPrevZone{n} : REAL;",
-        f"    fUnlockRemainZone{n} : REAL;",
-        f"    bWrittenZone{n} : BOOL;",
-        f"    bRefInvalidZone{n}, bRefLockedZone{n}, bRefDisableZone{n} : BOOL;",
-    ]
-    return loc, internal
+def param_defaults(table: list[dict[str, str]], z: Zone) -> str:
+    params = rows_of(table, z, "md") + [r for r in rows_of(table, z, "coil") if r["default"]]
+    return ", ".join(f"{wire(r)[1]} := {st_literal(zone_default(r, z), r['type'])}"
+                     for r in params if wire(r)[0] in ("param", "cfg") and r["type"] == "REAL")
 
 
 def zone_init(table: list[dict[str, str]], z: Zone) -> list[str]:
@@ -147,81 +119,90 @@ def zone_init(table: list[dict[str, str]], z: Zone) -> list[str]:
     return lines + ["    IF NOT bStoreKept THEN", *("  " + a for a in kept), "    END_IF;"]
 
 
-def sync_lines(table: list[dict[str, str]], z: Zone) -> list[str]:
-    n, out = z.n, []
-    for r in rows_of(table, z, "md", "coil"):
+def fills(table: list[dict[str, str]]) -> dict[str, list[str]]:
+    """The generated parts of the zone block's body, by their (*@KEY*) placeholder."""
+    rows = [r for r in table if r["zones"] == ""]
+    sync, status, show, apply = [], [], [], []
+    for r in rows:
         kind, field = wire(r)
-        reg, fb = f"{r['name']}Zone{n}", sync_block(r, n)
+        name, fb = r["name"], sync_block(r)
         if kind == "param" and r["type"] == "REAL":
-            out.append(f"  {fb}(bLoad := bLoadStore, fInUse := fbZone{n}.sValid.{field}, fRegister := {reg},"
-                       f" fParam := sParZone{n}.{field}, bAnyRefused := bRejectedZone{n});")
+            sync.append(f"  {fb}(bLoad := bLoadStore, fInUse := fbCtrl.sValid.{field}, fRegister := {name},"
+                        f" fParam := sPar.{field}, bAnyRefused := bRejected);")
         elif kind == "param":
-            out.append(f"  {fb}(bLoad := bLoadStore, dwInUse := fbZone{n}.sValid.{field},"
-                       f" dwRegister := {reg}, dwParam := sParZone{n}.{field});")
+            sync.append(f"  {fb}(bLoad := bLoadStore, dwInUse := fbCtrl.sValid.{field},"
+                        f" dwRegister := {name}, dwParam := sPar.{field});")
         elif kind == "cfg":
-            out.append(f"  sParZone{n}.{field} := {reg};")
-    return out
-
-
-def status_lines(table: list[dict[str, str]], z: Zone) -> list[str]:
-    n, out = z.n, []
-    for r in rows_of(table, z, "md", "coil", "fuzzy_md"):
-        kind, field = wire(r)
-        if kind == "fuzzy_out" and field != r["name"]:
-            out.append(f"  {r['name']}Zone{n} := fbFuzzyZone{n}.{field};")
+            sync.append(f"  sPar.{field} := {name};")
+        if kind == "fuzzy_out" and field != name:
+            status.append(f"  {name} := fbFuzzy.{field};")
         elif kind == "out":
-            out.append(f"  {r['name']}Zone{n} := fbZone{n}.{field};")
-        elif kind in ("inuse", "param"):
-            out.append(f"  {r['name']}Zone{n} := fbZone{n}.sValid.{field};")
-        elif kind == "cfg":
-            out.append(f"  {r['name']}Zone{n} := fbZone{n}.sValid.{field};")
-    return out
-
-
-def written_lines(table: list[dict[str, str]], z: Zone) -> list[str]:
-    """bWrittenZone<n>: a client wrote a synchronised parameter register in this scan."""
-    n = z.n
-    fbs = [f"{sync_block(r, n)}.bWritten" for r in rows_of(table, z, "md") if wire(r)[0] == "param"]
-    lines = [f"  bWrittenZone{n} := {fbs[0]}"]
-    lines += [f"    OR {fb}" for fb in fbs[1:]]
-    lines[-1] += ";"
-    return lines
-
-
-def fuzzy_registers(table: list[dict[str, str]], z: Zone, direction: str) -> list[str]:
-    """Fuzzy parameter registers from (direction 'show') or into ('apply') sFuzzyParZone<n>."""
-    n, out = z.n, []
-    for r in rows_of(table, z, "fuzzy_md"):
-        kind, field = wire(r)
-        if kind != "fuzzy_param" or field == r["name"]:
-            continue
-        reg, par = f"{r['name']}Zone{n}", f"sFuzzyParZone{n}.{field}"
-        out.append(f"    {reg} := {par};" if direction == "show" else f"    {par} := {reg};")
-    return out
-
-
-def zone_body(table: list[dict[str, str]], z: Zone) -> list[str]:
-    template = BODY.read_text()
-    sensor_start, sensor_end = template.index("(*@sensor"), template.index("(*@end sensor*)")
-    sensors = template[sensor_start:sensor_end].split("(*@sensor ")[1:]
-    chosen = next(s.split("*)", 1)[1] for s in sensors if s.startswith(z.sensor))
-    text = template[:sensor_start] + chosen.strip("\n") + template[sensor_end + len("(*@end sensor*)"):]
-    fills = {
-        "SYNC": sync_lines(table, z),
-        "STATUS": status_lines(table, z),
-        "WRITTEN": written_lines(table, z),
-        "FUZZY_SHOW": fuzzy_registers(table, z, "show"),
-        "FUZZY_APPLY": fuzzy_registers(table, z, "apply"),
-        "FUZZY_DEFAULTS": [
-            f"      {r['name']}Zone{z.n} := {r['default']};"
-            for r in rows_of(table, z, "fuzzy_md") if r["default"] and wire(r)[1] == r["name"]
-        ],
+            status.append(f"  {name} := fbCtrl.{field};")
+        elif kind in ("inuse", "param", "cfg") and r["section"] in ("md", "coil"):
+            status.append(f"  {name} := fbCtrl.sValid.{field};")
+        if kind == "fuzzy_param" and field != name:
+            show.append(f"    {name} := sFuzzyPar.{field};")
+            apply.append(f"    sFuzzyPar.{field} := {name};")
+    written = [f"{sync_block(r)}.bWritten" for r in rows if wire(r)[0] == "param" and r["section"] == "md"]
+    return {
+        "SYNC": sync, "STATUS": status, "FUZZY_SHOW": show, "FUZZY_APPLY": apply,
+        "WRITTEN": [f"  bWritten := {written[0]}", *(f"    OR {w}" for w in written[1:-1]),
+                    f"    OR {written[-1]};"],
+        "FUZZY_DEFAULTS": [f"      {r['name']} := {r['default']};" for r in rows
+                           if r["section"] == "fuzzy_md" and r["default"] and wire(r)[1] == r["name"]],
     }
-    lines: list[str] = []
-    for line in text.replace("{n}", str(z.n)).replace("{title}", z.title).split("\n"):
-        key = line.strip().removeprefix("(*@").removesuffix("*)")
-        lines += fills[key] if key in fills else [line]
-    return lines
+
+
+def block_ports(table: list[dict[str, str]], body: str) -> tuple[list[dict[str, str]], list[dict[str, str]]]:
+    """(read-only, read-write) registers of the zone block: those its body names, in table order."""
+    used = [r for r in table if r["zones"] == "" and r["section"] != "global_mw"
+            and re.search(rf"(?<![\w.]){r['name']}(?!\w)", body)]
+    written = [r for r in used if re.search(rf"(?<![\w.]){r['name']}\s*:=|Register := {r['name']}\b", body)]
+    return [r for r in used if r not in written], written
+
+
+def zone_block(table: list[dict[str, str]]) -> tuple[str, list[dict[str, str]]]:
+    """(FB_TempZone's source, its registers in the order of its ports)."""
+    fill = fills(table)
+    template = BLOCK_TEMPLATE.read_text()
+    body = template[template.index("\n\n", template.index("VAR CONSTANT")):]
+    for key, lines in fill.items():
+        body = body.replace(f"(*@{key}*)", "\n".join(lines).strip())
+    inputs, inouts = block_ports(table, body)
+    sensors = [r for r in table if wire(r)[0] == "sensor"]
+    fill["INPUTS"] = [f"    {r['name']} : {r['type']}; (* {r['description']} *)" for r in sensors + inputs]
+    fill["INOUTS"] = [f"    {r['name']} : {r['type']}; (* {r['description']} *)" for r in inouts]
+    fill["SYNC_BLOCKS"] = [f"    {sync_block(r)} : FB_ParamSync{'Real' if r['type'] == 'REAL' else 'Dword'};"
+                           for r in table if r["zones"] == "" and wire(r)[0] == "param"]
+    out: list[str] = []
+    for line in template.split("\n"):
+        out += fill.get(line.strip().removeprefix("(*@").removesuffix("*)"), [line])
+    return "\n".join(out), sensors + inputs + inouts
+
+
+def zone_call(table: list[dict[str, str]], z: Zone) -> list[str]:
+    n, ports = z.n, zone_block(table)[1]
+    args = ["bLoadStore := bLoadStore", "bStoreKept := bStoreKept", "nUnlockKeyValue := nUnlockKeyValue",
+            f"bNtcDivider := {'TRUE' if z.sensor == 'ntc' else 'FALSE'}", f"sPar := sParZone{n}"]
+    args += [f"{r['name']} := {r['name']}Zone{n}" for r in ports if r["zones"] in ("", str(n))]
+    lines, line = [], f"  fbZone{n}("
+    for i, a in enumerate(args):
+        piece = a + (");" if i == len(args) - 1 else ", ")
+        if len(line) + len(piece) > LINE_WIDTH:
+            lines.append(line.rstrip())
+            line = "    "
+        line += piece
+    return [f"  (* ================= zone {n}: {z.title} ================= *)", *lines, line]
+
+
+def zone_decls(table: list[dict[str, str]], z: Zone) -> tuple[list[str], list[str]]:
+    """(located declarations, internal declarations) of zone z."""
+    loc = [f"    (* ---- zone {z.n}: {z.title} ---- *)"]
+    loc += [declaration(r, f"{r['name']}Zone{z.n}", location(r, z), z)
+            for r in rows_of(table, z, "md", "mw", "iw", "coil", "fuzzy_md", "fuzzy_coil")]
+    internal = [f"    sParZone{z.n} : ST_ControllerParameter := ({param_defaults(table, z)});",
+                f"    fbZone{z.n} : FB_TempZone;"]
+    return loc, internal
 
 
 def generate() -> str:
@@ -238,15 +219,7 @@ def generate() -> str:
     out += ["  VAR", "    bInitDone, bStoreKept, bLoadStore : BOOL;", *internal, "  END_VAR",
             "  VAR CONSTANT",
             "    nStoreSignatureValue : INT := 16#7E57; (* first scan: kept by a persistent store *)",
-            "    nRawFullScale : INT := 32767;",
-            "    fROpenCircuit : REAL := 1.0E9; (* NTC divider: resistance of an open input, ohm *)",
-            "    dwParamErrorBit : DWORD := 16#00010000;",
             "    nUnlockKeyValue : DINT := 16#5AFE; (* engineering unlock key, set at commissioning *)",
-            "    fUnlockTime : REAL := 600.0; (* s an engineering unlock lasts *)",
-            "    nRefusalInvalid : INT := 1;",
-            "    nRefusalLocked : INT := 2;",
-            "    nRefusalDisable : INT := 4;",
-            "    fFuzzyEcFilterRatio : REAL := 0.25; (* ec filter time / dead time *)",
             "  END_VAR", "",
             "  bLoadStore := FALSE;",
             "  IF NOT bInitDone THEN",
@@ -255,13 +228,14 @@ def generate() -> str:
             "    bLoadStore := bStoreKept;"]
     for z in ZONES:
         out += zone_init(table, z)
-    out += ["    bInitDone := TRUE;", "  END_IF;", ""]
+    out += ["    bInitDone := TRUE;", "  END_IF;"]
     for z in ZONES:
-        out += zone_body(table, z) + [""]
+        out += zone_call(table, z)
     out.append("END_PROGRAM")
     return "\n".join(out) + "\n"
 
 
 if __name__ == "__main__":
     OUT.write_text(generate())
-    print(f"wrote {OUT}")
+    BLOCK.write_text(zone_block(read_table())[0])
+    print(f"wrote {OUT} and {BLOCK}")

@@ -149,6 +149,8 @@ class ZoneSequencer:
             ramp_c_per_min=ph.ramp_c_per_min,
             pv_start=pv,
         )
+        if self.index == 0:
+            writes.update(self.variant.writes)
         writes.update(ph.writes)
         if ph.writes and self.binding.has("unlock"):
             # the scenario acts as the commissioning engineer: its writes may touch protected settings

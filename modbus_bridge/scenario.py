@@ -91,6 +91,7 @@ class Zone:
 class Variant:
     name: str
     fuzzy: bool | None = None
+    writes: dict[str, float | int | bool] = field(default_factory=dict)
 
 
 @dataclass
@@ -191,7 +192,7 @@ def load_scenario(path: str | Path) -> Scenario:
              phases=[_phase(p) for p in z.phase])
         for z in doc.zone
     ]
-    variants = [Variant(name=v.name, fuzzy=v.fuzzy) for v in doc.variant] or [Variant(name="as written")]
+    variants = [Variant(name=v.name, fuzzy=v.fuzzy, writes=dict(v.write)) for v in doc.variant] or [Variant(name="as written")]
     return Scenario(
         path=file,
         name=doc.name,

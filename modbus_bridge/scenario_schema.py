@@ -227,6 +227,10 @@ class PlcTable(_Strict):
 class VariantTable(_Strict):
     name: StrictStr
     fuzzy: StrictBool | None = None
+    write: dict[str, StrictBool | StrictInt | Finite] = Field(
+        default_factory=dict,
+        description="register writes at the start of the run (e.g. bHeatUpZone1 = true), before the first phase's",
+    )
 
 
 class TargetTable(_Strict):

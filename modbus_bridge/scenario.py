@@ -192,7 +192,8 @@ def load_scenario(path: str | Path) -> Scenario:
              phases=[_phase(p) for p in z.phase])
         for z in doc.zone
     ]
-    variants = [Variant(name=v.name, fuzzy=v.fuzzy, writes=dict(v.write)) for v in doc.variant] or [Variant(name="as written")]
+    variants = [Variant(name=v.name, fuzzy=v.fuzzy, writes=dict(v.write)) for v in doc.variant]
+    variants = variants or [Variant(name="as written")]
     return Scenario(
         path=file,
         name=doc.name,

@@ -229,7 +229,7 @@ class VariantTable(_Strict):
     fuzzy: StrictBool | None = None
     write: dict[str, StrictBool | StrictInt | Finite] = Field(
         default_factory=dict,
-        description="register writes at the start of the run (e.g. bHeatUpZone1 = true), before the first phase's",
+        description="register writes at the start of the run (e.g. bHeatUpZone1 = true), before the phases'",
     )
 
 

@@ -76,7 +76,8 @@ def test_seed003_step_within_the_bound_without_overshoot() -> None:
     with_model = step_response(controller(heat_up=True))
     plain = step_response(controller(heat_up=False))
     print(f"seed 003 160->200 degC: bound {bound:.1f} s; model-based {with_model.settling_s:.1f} s, "
-          f"{with_model.overshoot_pct:.2f} %; PID alone {plain.settling_s:.1f} s, {plain.overshoot_pct:.2f} %")
+          f"{with_model.overshoot_pct:.2f} %; PID alone {plain.settling_s:.1f} s, "
+          f"{plain.overshoot_pct:.2f} %")
     assert with_model.settling_s <= 1.05 * bound
     assert with_model.overshoot_pct <= 0.5
     assert with_model.settling_s < plain.settling_s
@@ -146,6 +147,7 @@ def test_model_mismatch_within_goals(t_scale: float, l_scale: float) -> None:
     t, l = T * t_scale, L * l_scale
     res = step_response(controller(heat_up=True), t=t, l=l)
     bound = bound_s(t=t, l=l)
-    print(f"T x{t_scale} L x{l_scale}: {res.settling_s:.1f} s (bound {bound:.1f} s), {res.overshoot_pct:.2f} %")
+    print(f"T x{t_scale} L x{l_scale}: {res.settling_s:.1f} s (bound {bound:.1f} s), "
+          f"{res.overshoot_pct:.2f} %")
     assert res.overshoot_pct <= 2.0
     assert res.settling_s <= 1.5 * bound

@@ -47,6 +47,9 @@ class InvocationGen(Generator):
                 outs.append((pname, value))
             else:
                 assigns.append((pname, value))
+        # the instance is looked up once per call: later lines use a local bound to it
+        inst = self.ctx.new_tmp()
+        target_code, fb = fb.code, Ex(inst, fb.t, fb.c)
         lines = []
         inouts_back = []
         for pname, value in assigns:
@@ -64,6 +67,7 @@ class InvocationGen(Generator):
                     f"{fb.code}.v_{pname} = {convert_store(self.ctx, e, mt, value, what=repr(pname))}"
                 )
         self.ctx.flush_pre()
+        self.ctx.emit(f"{inst} = {target_code}")
         for ln in lines:
             self.ctx.emit(ln)
         self.ctx.emit(f"{fb.code}._run()")

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import pytest
 
 from tests.st_helpers import ScanDriver, controller_program, load_test_app
+from tests.test_lib_max_sensitivity import reference as reference_ms
 
 TS = 0.2  # control and task cycle of these tests, s
 MODE_ACTIVE, MODE_TUNE = 2, 5
@@ -126,7 +127,7 @@ def rule_values(rule: int, ks: float, tu: float, tg: float, vmax: float, dy: flo
 
 
 def identified(drv: ScanDriver) -> dict[str, float]:
-    names = ("fKs", "fTu", "fTg", "fVmax", "fKp", "fTn", "fTv", "fTd", "fTauNorm")
+    names = ("fKs", "fTu", "fTg", "fVmax", "fKp", "fTn", "fTv", "fTd", "fTauNorm", "fMsTuned")
     return {n: drv.get(f"sPar.{n}") for n in names}
 
 
@@ -151,6 +152,10 @@ def test_fopdt_identified_within_10_percent_and_auto_rule(uut, k, t, l, w, dy, e
     assert uut.get("nRuleUsed") == expected_rule
     want = rule_values(expected_rule, got["fKs"], got["fTu"], got["fTg"], got["fVmax"], dy)
     assert [got["fKp"], got["fTn"], got["fTv"], got["fTd"]] == pytest.approx(want, rel=1e-3, abs=1e-6)
+    # the robustness of the proposed set, on the model the tuner identified, is published with it
+    ms = reference_ms(got["fKs"], got["fTu"], got["fTg"], got["fKp"], got["fTn"], got["fTv"], got["fTd"])
+    assert got["fMsTuned"] == pytest.approx(ms, rel=0.02)
+    print(f"K {k} T {t} L {l}: rule {expected_rule}, Ms {got['fMsTuned']:.2f} on the identified model")
 
 
 @pytest.mark.parametrize("rule", [RULE_CHR, RULE_COHEN_COON, RULE_SIMC])

@@ -126,6 +126,9 @@ def rule_values(rule: int, ks: float, tu: float, tg: float, vmax: float, dy: flo
     return tg / (ks * (tauc + tu)), min(tg + tu / 3, 4 * (tauc + tu)), 0.0, 0.0
 
 
+DETUNE_FACTOR, MS_MAX = 0.9, 2.0  # FC_ApplyTuningRule's Kp step; a robustness limit for fTuneMsMax
+
+
 def identified(drv: ScanDriver) -> dict[str, float]:
     names = ("fKs", "fTu", "fTg", "fVmax", "fKp", "fTn", "fTv", "fTd", "fTauNorm", "fMsTuned")
     return {n: drv.get(f"sPar.{n}") for n in names}
@@ -139,9 +142,10 @@ def identified(drv: ScanDriver) -> dict[str, float]:
         (1.0, 20.0, 30.0, 70.0, 100.0, RULE_SIMC),         # delay dominated, tau = 0.6
     ],
 )
-def test_fopdt_identified_within_10_percent_and_auto_rule(uut, k, t, l, w, dy, expected_rule) -> None:
+@pytest.mark.parametrize("ms_max", [0.0, MS_MAX], ids=["formula", "ms-limited"])
+def test_fopdt_identified_within_10_percent_and_auto_rule(uut, k, t, l, w, dy, expected_rule, ms_max) -> None:
     plant = Fopdt(k=k, t=t, l=l)
-    run_tune(uut, plant, w=w, y_tune=dy)
+    run_tune(uut, plant, w=w, y_tune=dy, extra={"fTuneMsMax": ms_max})
     assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
     assert uut.get("nState") == STATE_TUNED
     got = identified(uut)
@@ -151,11 +155,23 @@ def test_fopdt_identified_within_10_percent_and_auto_rule(uut, k, t, l, w, dy, e
     assert got["fTauNorm"] == pytest.approx(got["fTu"] / (got["fTu"] + got["fTg"]), rel=1e-4)
     assert uut.get("nRuleUsed") == expected_rule
     want = rule_values(expected_rule, got["fKs"], got["fTu"], got["fTg"], got["fVmax"], dy)
-    assert [got["fKp"], got["fTn"], got["fTv"], got["fTd"]] == pytest.approx(want, rel=1e-3, abs=1e-6)
+    assert [got["fTn"], got["fTv"], got["fTd"]] == pytest.approx(want[1:], rel=1e-3, abs=1e-6)
     # the robustness of the proposed set, on the model the tuner identified, is published with it
-    ms = reference_ms(got["fKs"], got["fTu"], got["fTg"], got["fKp"], got["fTn"], got["fTv"], got["fTd"])
+    model = (got["fKs"], got["fTu"], got["fTg"])
+    ms = reference_ms(*model, got["fKp"], got["fTn"], got["fTv"], got["fTd"])
     assert got["fMsTuned"] == pytest.approx(ms, rel=0.02)
-    print(f"K {k} T {t} L {l}: rule {expected_rule}, Ms {got['fMsTuned']:.2f} on the identified model")
+    steps = round(math.log(got["fKp"] / want[0]) / math.log(DETUNE_FACTOR))
+    assert got["fKp"] == pytest.approx(want[0] * DETUNE_FACTOR**steps, rel=1e-3)
+    if not ms_max:
+        assert steps == 0  # the rule's formula as documented
+    else:
+        # AUTO with fTuneMsMax proposes no fragile set: Kp in steps of 0.9 down to Ms <= 2, not a step further
+        assert ms <= ms_max * 1.02
+        if steps:
+            kp_up = got["fKp"] / DETUNE_FACTOR
+            assert reference_ms(*model, kp_up, got["fTn"], got["fTv"], got["fTd"]) > ms_max * 0.98
+    print(f"K {k} T {t} L {l}, fTuneMsMax {ms_max}: rule {expected_rule}, Kp {got['fKp']:.3g}, "
+          f"Ms {got['fMsTuned']:.2f} on the identified model")
 
 
 @pytest.mark.parametrize("rule", [RULE_CHR, RULE_COHEN_COON, RULE_SIMC])

@@ -101,18 +101,14 @@ def limit_phase(drv: ScanDriver) -> None:
     assert drv.get("fbUut.fbHeatUp.bLimitPhase") and drv.get("fbUut.fY") == 100.0, "not at the output limit"
 
 
-def test_idle_during_the_limit_phase_gives_zero_in_the_same_scan() -> None:
+@pytest.mark.parametrize("fault", ["idle", "sensor short"])
+def test_idle_or_a_fault_during_the_limit_phase_gives_zero_in_the_same_scan(fault: str) -> None:
     drv = controller(heat_up=True)
     limit_phase(drv)
-    drv.set("nMode", IDLE)
-    drv.scan()
-    assert drv.get("fbUut.fY") == 0.0 and not drv.get("fbUut.bYPWMPos")
-
-
-def test_sensor_fault_during_the_limit_phase_gives_zero_in_the_same_scan() -> None:
-    drv = controller(heat_up=True)
-    limit_phase(drv)
-    drv.set("fbUut.bSensorShort", True)
+    if fault == "idle":
+        drv.set("nMode", IDLE)
+    else:
+        drv.set("fbUut.bSensorShort", True)
     drv.scan()
     assert drv.get("fbUut.fY") == 0.0 and not drv.get("fbUut.bYPWMPos")
 

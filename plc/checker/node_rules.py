@@ -1,0 +1,261 @@
+"""Rules on single tree nodes anywhere in a file, and on TYPE definitions (rows of matiec-dialect.md)."""
+
+from __future__ import annotations
+
+import math
+
+from tree_sitter import Node
+
+from plc.checker.base import CheckerBase
+from plc.checker.symbols import (
+    POU_KINDS,
+    ArrayT,
+    Pou,
+    type_of,
+)
+from plc.checker.tree import next_sibling, prev_sibling
+from plc.checker.typing_rules import compatibility
+from plc.checker.vocabulary import (
+    ANY_INT,
+    ANY_REAL,
+    GENERIC_CONVERSIONS,
+    TWINCAT_OPERATORS,
+    UNSUPPORTED_TYPES,
+)
+
+COMPOUND_STATEMENTS = {
+    "if_statement": "END_IF",
+    "for_statement": "END_FOR",
+    "while_statement": "END_WHILE",
+    "repeat_statement": "END_REPEAT",
+    "case_statement": "END_CASE",
+}
+# iec2c refuses real literals far outside the binary32 range, even for LREAL ("Numerical value exceeds
+# range for LREAL data type"). Evidence (conformance README + corpus): 1.0E39, 1.0E-40, 1.0E308 refused;
+# 1.0E-38 (binary32 subnormal) and 3.4028235677973366E38 (FLT_MAX + half an ulp) accepted. The limits
+# below sit at the accepted evidence so that no accepted literal is reported.
+REAL_LITERAL_MIN = 1.0e-39
+REAL_LITERAL_MAX = 3.4028235677973366e38
+
+
+class NodeRules(CheckerBase):
+    """Statements, literals, arrays, calls, member access, TYPEs."""
+
+    # ---- rules on single nodes anywhere --------------------------------------------------------
+    def node_rules(self, node: Node) -> None:
+        kind = node.type
+        if kind in COMPOUND_STATEMENTS:
+            nxt = next_sibling(node)
+            if nxt is None or nxt.type != "empty_statement":
+                self.report_end(node, f"missing ';' after {COMPOUND_STATEMENTS[kind]}")
+        elif kind == "empty_statement":
+            prev = prev_sibling(node)
+            if (
+                (prev is None or prev.type not in COMPOUND_STATEMENTS)
+                and not self._has_lexical_finding(node)
+                and not (node.parent is not None and node.parent.type == "ERROR")
+            ):
+                self.report(node, "empty statement ';' is refused by MatIEC")
+        elif kind == "binary_expression":
+            op = node.child_by_field_name("operator")
+            if op is not None and op.type == "**":
+                self.report(
+                    op, "'**' power operator: MatIEC generates C that does not compile; use EXPT(x, y)"
+                )
+        elif kind == "address_of_expression":
+            self.report(node, "ADR() is TwinCAT-only; MatIEC has REF()")
+        elif kind == "pointer_type":
+            self.report(node, "POINTER TO is TwinCAT-only; MatIEC has REF_TO")
+        elif kind == "elementary_type" or kind == "string_type":
+            word = self.ps.node_text(node).split("(")[0].split("[")[0].strip().upper()
+            if word in UNSUPPORTED_TYPES:
+                self.report(node, UNSUPPORTED_TYPES[word])
+            elif kind == "string_type" and node.child_by_field_name("length") is not None:
+                self.report(
+                    node,
+                    "STRING(n) / STRING[n] length syntax is not accepted by MatIEC; declare plain STRING",
+                )
+        elif kind == "array_type":
+            self.array_rules(node)
+        elif kind == "real_literal":
+            self.real_literal_rules(node)
+        elif kind == "call_expression":
+            self.call_rules(node)
+        elif kind == "member_access_expression":
+            self.member_access_rules(node)
+        elif kind == "assignment_statement":
+            left = node.child_by_field_name("left")
+            if left is not None and left.type == "dereference_expression":
+                self.report(
+                    left,
+                    "writing through a dereference (r^ := ...) makes MatIEC generate C that does "
+                    "not compile; pass the variable as VAR_IN_OUT instead",
+                )
+        elif kind in (
+            "method_declaration",
+            "property_declaration",
+            "interface_declaration",
+            "namespace_declaration",
+        ) and not self._has_lexical_finding(node):
+            word = kind.split("_")[0].upper()
+            self.report(node, f"{word} (object-oriented IEC v3 / TwinCAT) is not supported by MatIEC")
+
+    def _has_lexical_finding(self, node: Node) -> bool:
+        line = node.start_point[0] + 1
+        return any(d.line == line for d in self.diagnostics)
+
+    def real_literal_rules(self, node: Node) -> None:
+        text = self.ps.node_text(node).replace("_", "")
+        try:
+            value = abs(float(text))
+        except ValueError:
+            return
+        if value != 0.0 and (value < REAL_LITERAL_MIN or value > REAL_LITERAL_MAX or math.isinf(value)):
+            self.report(
+                node,
+                f"real literal {text} is out of range: iec2c refuses literals outside the "
+                "binary32 range, even for LREAL",
+            )
+
+    def array_rules(self, node: Node) -> None:
+        element = node.child_by_field_name("element_type")
+        pou = self._enclosing_pou(node)
+        if element is not None:
+            etype = type_of(element, self.ps)
+            if element.type == "array_type" or isinstance(self.symbols.resolve(etype), ArrayT):
+                self.report(
+                    element,
+                    "ARRAY OF ARRAY makes MatIEC generate C that does not compile; "
+                    "use a 2-D ARRAY[a..b, c..d]",
+                )
+            elif self.symbols.is_fb_type(etype):
+                self.report(
+                    element,
+                    f"ARRAY OF function block instances ({self.ps.node_text(element)}) is refused "
+                    "by MatIEC; declare the instances one by one",
+                )
+        for rng in node.children_by_field_name("range"):
+            for bound_field in ("lower", "upper"):
+                bound = rng.child_by_field_name(bound_field)
+                if bound is not None:
+                    self.bound_rule(bound, pou)
+
+    def bound_rule(self, bound: Node, pou: Pou | None) -> None:
+        if bound.type == "integer_literal":
+            return
+        if bound.type == "unary_expression":
+            operand = bound.child_by_field_name("operand")
+            if operand is not None and operand.type == "integer_literal":
+                return
+        if bound.type == "identifier":
+            name = self.ps.node_text(bound).upper()
+            var = pou.vars.get(name) if pou is not None else None
+            if var is not None and var.section == "VAR_EXTERNAL" and var.constant:
+                return
+            if var is not None:
+                self.report(
+                    bound,
+                    f"array bound '{self.ps.node_text(bound)}' is a local constant: MatIEC accepts "
+                    "only literals or a VAR_EXTERNAL CONSTANT",
+                )
+            elif pou is None and name in self.symbols.globals and self.symbols.globals[name].constant:
+                return
+            return  # unknown name: leave it to the compiler
+        self.report(
+            bound,
+            f"array bound expression '{self.ps.node_text(bound)}' is refused by MatIEC; "
+            "use a literal or a single VAR_EXTERNAL CONSTANT",
+        )
+
+    def call_rules(self, node: Node) -> None:
+        fn = node.child_by_field_name("function")
+        if fn is None or fn.type != "identifier":
+            return
+        name = self.ps.node_text(fn)
+        upper = name.upper()
+        if upper in GENERIC_CONVERSIONS:
+            self.report(
+                fn,
+                f"generic conversion {name}() is not accepted by MatIEC; use a typed conversion "
+                "such as REAL_TO_INT",
+            )
+        elif upper in TWINCAT_OPERATORS:
+            self.report(fn, f"{name}() is TwinCAT-only; MatIEC refuses it")
+        elif "_TO_" in upper:
+            source = upper.split("_TO_")[0]
+            if self.symbols.is_enum(source):
+                self.report(
+                    fn,
+                    f"conversion function {name}() of an enumerated type needs iec2c -c, which "
+                    "OpenPLC does not pass; map the enum with CASE",
+                )
+
+    def member_access_rules(self, node: Node) -> None:
+        obj = node.child_by_field_name("object")
+        member = node.child_by_field_name("member")
+        if obj is None:
+            return
+        if obj.type == "call_expression":
+            self.report(
+                node,
+                "member access on a function result F().x is refused by MatIEC; "
+                "store the result in a variable first",
+            )
+        elif obj.type == "identifier" and member is not None:
+            name = self.ps.node_text(obj).upper()
+            pou = self._enclosing_pou(node)
+            if self.symbols.is_enum(name) and (pou is None or name not in pou.vars):
+                self.report(
+                    node,
+                    f"enum value written {self.ps.node_text(node)} (TwinCAT qualified access) is "
+                    f"refused by MatIEC; write {self.ps.node_text(obj)}#{self.ps.node_text(member)}",
+                )
+
+    def _enclosing_pou(self, node: Node) -> Pou | None:
+        cur = node.parent
+        while cur is not None and cur.type not in POU_KINDS:
+            cur = cur.parent
+        if cur is None:
+            return None
+        name = cur.child_by_field_name("name")
+        return self.symbols.pous.get(self.ps.node_text(name).upper()) if name is not None else None
+
+
+    # ---- TYPE rules ----------------------------------------------------------------------------
+    def struct_default_rules(self, body: Node) -> None:
+        """Default values of STRUCT members against the member type (same rule as initial values)."""
+        for fld in body.named_children:
+            default = fld.child_by_field_name("default") if fld.type == "structure_field" else None
+            if default is None:
+                continue
+            ftype = self.symbols.resolve(type_of(fld.child_by_field_name("type"), self.ps))
+            value = default
+            if value.type == "unary_expression":
+                value = value.child_by_field_name("operand") or value
+            literal = {"integer_literal": ANY_INT, "real_literal": ANY_REAL}.get(value.type)
+            why = compatibility(ftype, literal) if isinstance(ftype, str) and literal else None
+            if why:
+                self.report(default, f"incompatible initial value: {why}")
+
+    def type_definition_rules(self, node: Node) -> None:
+        body = node.child_by_field_name("definition")
+        if body is None:
+            return
+        if body.type == "structure_type_inline":
+            self.struct_default_rules(body)
+        if body.type == "enumerated_type_inline":
+            for en in body.named_children:
+                if en.type == "enumerator" and en.child_by_field_name("value") is not None:
+                    self.report(
+                        en,
+                        "enumerated value with an explicit value (A := 1) is refused by MatIEC; "
+                        "list the names only",
+                    )
+        if body.type == "identifier":
+            for offset, init in self.ps.type_initializers.items():
+                if node.start_byte <= offset < node.end_byte and init.lstrip().startswith("("):
+                    self.report(
+                        body,
+                        "named initial values in a derived type declaration (TYPE T2 : T := (...)) "
+                        "make MatIEC generate C that does not compile; initialise the variables",
+                    )

@@ -1,6 +1,7 @@
-"""Tree rules: what MatIEC refuses, one method per family of rows of the dialect table.
+"""The checker on one file: every family of rules (text, nodes, POUs, TYPEs, naming) in the order they run.
 
-The row names quoted in the messages' comments are those of ../shared/reference/matiec-dialect.md.
+What MatIEC refuses, one method per family of rows of ../shared/reference/matiec-dialect.md (the row names
+quoted in the rule modules' comments are that table's).
 """
 
 from __future__ import annotations

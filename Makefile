@@ -3,7 +3,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: run test test-newest docs bench lint bundle clean browser demo fuzz
+.PHONY: run test test-newest docs bench lint bundle clean browser demo fuzz checker-mutants
 
 $(STAMP): pyproject.toml
 	python3 -m venv $(VENV)
@@ -58,6 +58,10 @@ demo: $(STAMP)
 # the hostile-client test at a million writes (the suite runs 50,000): a few minutes, prints its counts
 fuzz: $(STAMP)
 	THERMOST_FUZZ_WRITES=1000000 $(VENV)/bin/pytest -q -s -p no:cacheprovider tests/acceptance/test_write_fuzz.py
+
+# seeded type errors in the library, each checked as one program: a few minutes, prints its counts
+checker-mutants: $(STAMP)
+	$(VENV)/bin/python tests/measure_checker_mutants.py
 
 bench: $(STAMP)
 	$(VENV)/bin/thermost bench

@@ -14,8 +14,8 @@ from pathlib import Path
 
 from plc.checker.lexical import scan
 from plc.checker.rules import FileChecker
-from plc.checker.symbols import collect
 from plc.cli import UserError, read_text_file
+from plc.st.compiler import analyse
 from plc.st.diagnostics import Diagnostic
 from plc.st.parser import parse_source
 
@@ -26,11 +26,10 @@ def check_sources(sources: list[tuple[str, str]]) -> list[Diagnostic]:
     parsed = [parse_source(sc.blanked, filename) for sc, (filename, _) in zip(scans, sources, strict=True)]
     for ps, (_, text) in zip(parsed, sources, strict=True):
         ps.text = text
-    found: set[Diagnostic] = set()
-    for index, (ps, sc) in enumerate(zip(parsed, scans, strict=True)):
-        # every file sees the declarations of the others; its own win when names clash
-        symbols = collect([*parsed[:index], *parsed[index + 1 :], ps])
-        found.update(FileChecker(ps, sc, symbols).run())
+    index, typing = analyse(parsed)  # the compiler's index and typing rules, once for the program
+    found: set[Diagnostic] = set(typing)
+    for ps, sc in zip(parsed, scans, strict=True):
+        found.update(FileChecker(ps, sc, index).run())
     return sorted(found, key=lambda d: (d.filename, d.line, d.col, d.message))
 
 

@@ -5,19 +5,41 @@ from __future__ import annotations
 from tree_sitter import Node
 
 from plc.checker.lexical import LexicalScan
-from plc.checker.symbols import Symbols
 from plc.st.diagnostics import Diagnostic
+from plc.st.index import Index
+from plc.st.model import CompileError
 from plc.st.parser import ParsedSource
+from plc.st.types import UNKNOWN, Type
 
 
 class CheckerBase:
-    """One file under check: its parse, lexical scan, the declarations of the whole run, the findings."""
+    """One file under check: its parse, lexical scan, the program's index (the compiler's, built
+    leniently from every file of the run), the findings."""
 
-    def __init__(self, ps: ParsedSource, lexical: LexicalScan, symbols: Symbols):
+    def __init__(self, ps: ParsedSource, lexical: LexicalScan, index: Index):
         self.ps = ps
         self.lexical = lexical
-        self.symbols = symbols
+        self.index = index
         self.diagnostics: list[Diagnostic] = []
+
+    # ---- declarations --------------------------------------------------------------------------
+    def declared_type(self, spec: Node | None) -> Type | None:
+        """The type a type node of this file names, as the compiler's index builds it (None: unknown)."""
+        if spec is None or spec.type not in ("identifier", "elementary_type", "array_type", "string_type"):
+            return None
+        try:
+            t = self.index.type_from_spec(spec, self.ps)
+        except CompileError:
+            return None
+        return None if t.kind == UNKNOWN else t
+
+    def named_type(self, name: str) -> Type | None:
+        """A declared data type or function block type by name (None: none)."""
+        try:
+            t = self.index.resolve_named(name)
+        except (KeyError, CompileError):
+            return None
+        return None if t.kind == UNKNOWN else t
 
     # ---- reporting -----------------------------------------------------------------------------
     def report(self, node: Node, message: str) -> None:

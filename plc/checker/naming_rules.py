@@ -7,10 +7,7 @@ import re
 from tree_sitter import Node
 
 from plc.checker.base import CheckerBase
-from plc.checker.symbols import (
-    POU_KINDS,
-)
-from plc.checker.tree import descendants
+from plc.checker.tree import POU_KINDS, descendants
 from plc.checker.vocabulary import (
     is_reserved,
     is_standard_function,
@@ -51,13 +48,14 @@ class NamingRules(CheckerBase):
             seen.add(name_node.start_byte)
             self.name_rule(name, kind, lambda msg, n=name_node: self.report(n, msg))
             if kind == "variable":
-                owner = self.symbols.pous.get(name.upper())
+                owner = self.index.pous.get(name.upper())
                 if owner is not None:
                     self.report(
                         name_node,
-                        f"variable '{name}' has the same name as the POU '{owner.name}' (MatIEC refuses it)",
+                        f"variable '{name}' has the same name as the POU '{owner.written}' "
+                        "(MatIEC refuses it)",
                     )
-                elif name.upper() in self.symbols.types:
+                elif name.upper() in self.index.type_nodes:
                     self.report(
                         name_node, f"variable '{name}' has the same name as a data type (MatIEC refuses it)"
                     )

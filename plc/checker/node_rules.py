@@ -7,21 +7,13 @@ import math
 from tree_sitter import Node
 
 from plc.checker.base import CheckerBase
-from plc.checker.symbols import (
-    POU_KINDS,
-    ArrayT,
-    Pou,
-    type_of,
-)
-from plc.checker.tree import next_sibling, prev_sibling
-from plc.checker.typing_rules import compatibility
+from plc.checker.tree import POU_KINDS, next_sibling, prev_sibling
 from plc.checker.vocabulary import (
-    ANY_INT,
-    ANY_REAL,
     GENERIC_CONVERSIONS,
     TWINCAT_OPERATORS,
     UNSUPPORTED_TYPES,
 )
+from plc.st.model import Pou
 
 COMPOUND_STATEMENTS = {
     "if_statement": "END_IF",
@@ -121,14 +113,14 @@ class NodeRules(CheckerBase):
         element = node.child_by_field_name("element_type")
         pou = self._enclosing_pou(node)
         if element is not None:
-            etype = type_of(element, self.ps)
-            if element.type == "array_type" or isinstance(self.symbols.resolve(etype), ArrayT):
+            etype = self.declared_type(element)
+            if element.type == "array_type" or (etype is not None and etype.kind == "array"):
                 self.report(
                     element,
                     "ARRAY OF ARRAY makes MatIEC generate C that does not compile; "
                     "use a 2-D ARRAY[a..b, c..d]",
                 )
-            elif self.symbols.is_fb_type(etype):
+            elif etype is not None and etype.kind == "fb":
                 self.report(
                     element,
                     f"ARRAY OF function block instances ({self.ps.node_text(element)}) is refused "
@@ -148,9 +140,9 @@ class NodeRules(CheckerBase):
             if operand is not None and operand.type == "integer_literal":
                 return
         if bound.type == "identifier":
-            name = self.ps.node_text(bound).upper()
+            name = self.ps.node_text(bound).lower()
             var = pou.vars.get(name) if pou is not None else None
-            if var is not None and var.section == "VAR_EXTERNAL" and var.constant:
+            if var is not None and var.section == "ext" and var.constant:
                 return
             if var is not None:
                 self.report(
@@ -158,7 +150,7 @@ class NodeRules(CheckerBase):
                     f"array bound '{self.ps.node_text(bound)}' is a local constant: MatIEC accepts "
                     "only literals or a VAR_EXTERNAL CONSTANT",
                 )
-            elif pou is None and name in self.symbols.globals and self.symbols.globals[name].constant:
+            elif pou is None and name in self.index.globals and self.index.globals[name].constant:
                 return
             return  # unknown name: leave it to the compiler
         self.report(
@@ -183,7 +175,7 @@ class NodeRules(CheckerBase):
             self.report(fn, f"{name}() is TwinCAT-only; MatIEC refuses it")
         elif "_TO_" in upper:
             source = upper.split("_TO_")[0]
-            if self.symbols.is_enum(source):
+            if self.is_enum(source):
                 self.report(
                     fn,
                     f"conversion function {name}() of an enumerated type needs iec2c -c, which "
@@ -202,9 +194,9 @@ class NodeRules(CheckerBase):
                 "store the result in a variable first",
             )
         elif obj.type == "identifier" and member is not None:
-            name = self.ps.node_text(obj).upper()
+            name = self.ps.node_text(obj)
             pou = self._enclosing_pou(node)
-            if self.symbols.is_enum(name) and (pou is None or name not in pou.vars):
+            if self.is_enum(name) and (pou is None or name.lower() not in pou.vars):
                 self.report(
                     node,
                     f"enum value written {self.ps.node_text(node)} (TwinCAT qualified access) is "
@@ -218,31 +210,17 @@ class NodeRules(CheckerBase):
         if cur is None:
             return None
         name = cur.child_by_field_name("name")
-        return self.symbols.pous.get(self.ps.node_text(name).upper()) if name is not None else None
+        return self.index.pous.get(self.ps.node_text(name).upper()) if name is not None else None
 
+    def is_enum(self, name: str) -> bool:
+        t = self.named_type(name)
+        return t is not None and t.kind == "enum"
 
     # ---- TYPE rules ----------------------------------------------------------------------------
-    def struct_default_rules(self, body: Node) -> None:
-        """Default values of STRUCT members against the member type (same rule as initial values)."""
-        for fld in body.named_children:
-            default = fld.child_by_field_name("default") if fld.type == "structure_field" else None
-            if default is None:
-                continue
-            ftype = self.symbols.resolve(type_of(fld.child_by_field_name("type"), self.ps))
-            value = default
-            if value.type == "unary_expression":
-                value = value.child_by_field_name("operand") or value
-            literal = {"integer_literal": ANY_INT, "real_literal": ANY_REAL}.get(value.type)
-            why = compatibility(ftype, literal) if isinstance(ftype, str) and literal else None
-            if why:
-                self.report(default, f"incompatible initial value: {why}")
-
     def type_definition_rules(self, node: Node) -> None:
         body = node.child_by_field_name("definition")
         if body is None:
             return
-        if body.type == "structure_type_inline":
-            self.struct_default_rules(body)
         if body.type == "enumerated_type_inline":
             for en in body.named_children:
                 if en.type == "enumerator" and en.child_by_field_name("value") is not None:

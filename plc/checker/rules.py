@@ -37,8 +37,8 @@ class FileChecker(TextRules, NodeRules, PouRules, NamingRules):
                 )
         for node in descendants(root):
             self.node_rules(node)
-        for pou in self.symbols.pous.values():
-            if pou.source is self.ps:
+        for pou in self.index.pous.values():
+            if pou.src is self.ps:
                 self.pou_rules(pou)
         for node in descendants(root):
             if node.type == "type_definition":

@@ -7,11 +7,7 @@ import re
 from tree_sitter import Node
 
 from plc.checker.base import CheckerBase
-from plc.checker.symbols import (
-    POU_KINDS,
-    VAR_SECTIONS,
-)
-from plc.checker.tree import descendants
+from plc.checker.tree import POU_KINDS, VAR_SECTIONS, descendants
 
 _FUNCTION_WITHOUT_TYPE = re.compile(r"^[ \t]*FUNCTION[ \t]+([A-Za-z_]\w*)[ \t]*(?=\r?\n|$)", re.I | re.M)
 _ENUM_BASE_TYPE = re.compile(

@@ -28,8 +28,8 @@ from plc.st.types import REAL, Type
 class Compiler:
     """The stages on a list of parsed sources; `pous`, `globals` and `diags` come from the index."""
 
-    def __init__(self, sources: list[ParsedSource]):
-        self.index = Index(sources)
+    def __init__(self, sources: list[ParsedSource], lenient: bool = False):
+        self.index = Index(sources, lenient)
         self.diags = self.index.diags
         self.pous: dict[str, Pou] = self.index.pous
         self.globals: dict[str, Var] = self.index.globals
@@ -90,6 +90,17 @@ def typecheck(sources: list[tuple[str, str]]) -> list[Diagnostic]:
     comp = Compiler(_parse_all(sources))
     comp.compile()
     return sorted(set(comp.diags))
+
+
+def analyse(parsed: list[ParsedSource]) -> tuple[Index, list[Diagnostic]]:
+    """The checker's view: the lenient index of the sources and the type findings of every POU that
+    could be typed (declared only in terms of known types; a POU with a syntax error is left to the
+    syntax rules). The same index and typing rules the compiler generates code with."""
+    index = Index(parsed, lenient=True)
+    index.build()
+    declared = len(index.diags)
+    generate(index)
+    return index, sorted(set(index.diags[declared:]))
 
 
 def compile_to_python(sources: list[tuple[str, str]]) -> tuple[str, Compiler, list]:

@@ -46,6 +46,7 @@ class Var:
     constant: bool = False
     src: ParsedSource | None = None
     decl_name: str = ""  # as written in the source (the register map keeps the user's spelling)
+    node: Node | None = None  # the name where it is declared
 
 
 @dataclass
@@ -60,11 +61,21 @@ class Pou:
     pyname: str = ""
     failed: bool = False
 
+    @property
+    def written(self) -> str:
+        """Its name as the declaration writes it."""
+        name = self.node.child_by_field_name("name")
+        return self.src.node_text(name) if name is not None else self.name
+
     def params(self) -> list[Var]:
         return [self.vars[n] for n in self.order if self.vars[n].section in ("in", "inout")]
 
     def outputs(self) -> list[Var]:
         return [self.vars[n] for n in self.order if self.vars[n].section == "out"]
+
+    def types(self) -> list[Type]:
+        """The declared types of its variables and result."""
+        return [v.type for v in self.vars.values()] + ([self.ret] if self.ret is not None else [])
 
 
 @dataclass

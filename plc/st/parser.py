@@ -84,6 +84,17 @@ class ParsedSource:
     def node_text(self, node: tree_sitter.Node) -> str:
         return self.src[node.start_byte : node.end_byte].decode("utf-8", "replace")
 
+    def identifiers_in(self, node: tree_sitter.Node) -> set[str]:
+        """Upper-case names of every identifier below a node."""
+        out: set[str] = set()
+        stack = [node]
+        while stack:
+            cur = stack.pop()
+            if cur.type == "identifier":
+                out.add(self.node_text(cur).upper())
+            stack.extend(cur.children)
+        return out
+
     def position(self, node: tree_sitter.Node) -> tuple[int, int]:
         return node.start_point[0] + 1, node.start_point[1] + 1
 

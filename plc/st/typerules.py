@@ -139,6 +139,11 @@ def compare_types(ctx, a: Ex, b: Ex, op: str, node: Node) -> None:
         raise ctx.err(ctx.src, node, f"Data type mismatch for '{op}' expression ({ta.name}, {tb.name})")
 
 
+def _subject(what: str) -> str:
+    """What a failed store is: an operation (`':='`, an initial value) or a parameter of a call."""
+    return what if what.startswith("parameter ") else f"{what} operation"
+
+
 def convert_store(ctx, e: Ex, dst: Type, node: Node, what: str = "':='") -> str:
     """Code that stores expression e into a variable of type dst, with MatIEC's type rules."""
     src_t = e.t
@@ -155,7 +160,7 @@ def convert_store(ctx, e: Ex, dst: Type, node: Node, what: str = "':='") -> str:
         raise ctx.err(
             ctx.src,
             node,
-            f"Incompatible data types for {what} operation "
+            f"Incompatible data types for {_subject(what)} "
             f"({type_label(src_t)} to {dst.name}: use an explicit conversion)",
         )
     if dst.kind == "real":
@@ -168,7 +173,7 @@ def convert_store(ctx, e: Ex, dst: Type, node: Node, what: str = "':='") -> str:
         raise ctx.err(
             ctx.src,
             node,
-            f"Incompatible data types for {what} operation "
+            f"Incompatible data types for {_subject(what)} "
             f"({type_label(src_t)} to {dst.name}"
             + (
                 ": write a real literal such as 1.0)"
@@ -180,41 +185,41 @@ def convert_store(ctx, e: Ex, dst: Type, node: Node, what: str = "':='") -> str:
         if src_t.kind == "bool":
             return e.code
         raise ctx.err(
-            ctx.src, node, f"Incompatible data types for {what} operation ({type_label(src_t)} to BOOL)"
+            ctx.src, node, f"Incompatible data types for {_subject(what)} ({type_label(src_t)} to BOOL)"
         )
     if dst.kind == "time":
         if src_t.kind == "time":
             return e.code
         raise ctx.err(
-            ctx.src, node, f"Incompatible data types for {what} operation ({type_label(src_t)} to TIME)"
+            ctx.src, node, f"Incompatible data types for {_subject(what)} ({type_label(src_t)} to TIME)"
         )
     if dst.kind == "enum":
         if src_t is dst or (src_t.kind == "enum" and src_t.name == dst.name):
             return e.code
         raise ctx.err(
-            ctx.src, node, f"Incompatible data types for {what} operation ({type_label(src_t)} to {dst.name})"
+            ctx.src, node, f"Incompatible data types for {_subject(what)} ({type_label(src_t)} to {dst.name})"
         )
     if dst.kind in ("struct", "fb"):
         if src_t.kind == dst.kind and src_t.name == dst.name:
             return f"{e.code}._copy()"
         raise ctx.err(
-            ctx.src, node, f"Incompatible data types for {what} operation ({type_label(src_t)} to {dst.name})"
+            ctx.src, node, f"Incompatible data types for {_subject(what)} ({type_label(src_t)} to {dst.name})"
         )
     if dst.kind == "array":
         if src_t.kind == "array" and same_array(src_t, dst):
             return f"copy_array({e.code})"
-        raise ctx.err(ctx.src, node, f"Incompatible data types for {what} operation (array shapes differ)")
+        raise ctx.err(ctx.src, node, f"Incompatible data types for {_subject(what)} (array shapes differ)")
     if dst.kind == "ref":
         if src_t.kind == "ref" and (src_t.elem is None or src_t.elem.name == dst.elem.name):
             return e.code
         raise ctx.err(
-            ctx.src, node, f"Incompatible data types for {what} operation ({type_label(src_t)} to {dst.name})"
+            ctx.src, node, f"Incompatible data types for {_subject(what)} ({type_label(src_t)} to {dst.name})"
         )
     if dst.kind == "string":
         if src_t.kind == "string":
             return e.code
         raise ctx.err(
-            ctx.src, node, f"Incompatible data types for {what} operation ({type_label(src_t)} to STRING)"
+            ctx.src, node, f"Incompatible data types for {_subject(what)} ({type_label(src_t)} to STRING)"
         )
     raise ctx.err(ctx.src, node, f"cannot assign to a value of type {dst.name}")
 

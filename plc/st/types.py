@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 @dataclass(eq=False)
 class Type:
     name: str  # upper-case IEC name, e.g. "INT", "ST_PT", "ARRAY"
-    kind: str  # int real bool time enum struct array fb string anyint anyreal
+    kind: str  # int real bool time enum struct array fb string anyint anyreal unknown
     bits: int = 0
     signed: bool = True
     bitstring: bool = False  # BYTE WORD DWORD LWORD
@@ -104,6 +104,25 @@ LINT = ELEMENTARY["LINT"]
 INT = ELEMENTARY["INT"]
 TIME = ELEMENTARY["TIME"]
 STRING = ELEMENTARY["STRING"]
+
+
+UNKNOWN = "unknown"  # kind of a type named in no checked file (the checker's lenient index only)
+
+
+def has_unknown(t: Type | None, seen: set[int] | None = None) -> bool:
+    """Whether a type is, or is built from, an UNKNOWN type."""
+    if t is None:
+        return False
+    seen = seen if seen is not None else set()
+    if id(t) in seen:
+        return False
+    seen.add(id(t))
+    if t.kind == UNKNOWN:
+        return True
+    parts = [*t.fields.values(), t.elem]
+    if t.kind == "fb" and not isinstance(t.pou, str) and t.pou is not None:
+        parts += [v.type for v in t.pou.vars.values()]
+    return any(has_unknown(p, seen) for p in parts)
 
 
 def wrap_expr(t: Type) -> str | None:

@@ -270,7 +270,11 @@ class CallGen(Generator):
             else:
                 codes.append(
                     convert_store(
-                        self.ctx, self.exprs.expr(a, p.type), p.type, a, what=f"'{p.name}' argument"
+                        self.ctx,
+                        self.exprs.expr(a, p.type),
+                        p.type,
+                        a,
+                        what=f"parameter '{p.decl_name or p.name}' of {pou.name}",
                     )
                 )
         call = f"{pou.pyname}({', '.join(codes)})"

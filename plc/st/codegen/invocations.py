@@ -9,6 +9,7 @@ from tree_sitter import Node
 from plc.st.codegen.context import Generator
 from plc.st.model import Ex, c_of
 from plc.st.typerules import convert_store
+from plc.st.types import Type
 
 
 class InvocationGen(Generator):
@@ -63,9 +64,8 @@ class InvocationGen(Generator):
                     inouts_back.append(f"{lv.code} = {fb.code}.v_{pname}")
             else:
                 e = self.exprs.expr(value, mt)
-                lines.append(
-                    f"{fb.code}.v_{pname} = {convert_store(self.ctx, e, mt, value, what=repr(pname))}"
-                )
+                what = f"parameter '{self.declared_name(fb.t, pname)}' of {fb.t.name}"
+                lines.append(f"{fb.code}.v_{pname} = {convert_store(self.ctx, e, mt, value, what=what)}")
         self.ctx.flush_pre()
         self.ctx.emit(f"{inst} = {target_code}")
         for ln in lines:
@@ -78,3 +78,12 @@ class InvocationGen(Generator):
             lv = self.exprs.lvalue(target_node)
             val = Ex(f"{fb.code}.v_{pname}", mt, c_of(mt))
             self.ctx.emit(f"{lv.code} = {convert_store(self.ctx, val, lv.t, target_node)}")
+
+    @staticmethod
+    def declared_name(fb_type: Type, member: str) -> str:
+        """A member's name as its declaration writes it (standard blocks: upper case)."""
+        pou = fb_type.pou
+        if isinstance(pou, str) or pou is None:
+            return member.upper()
+        var = pou.vars.get(member)
+        return var.decl_name if var is not None and var.decl_name else member

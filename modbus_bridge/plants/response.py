@@ -65,12 +65,14 @@ class _Sim:
 
 
 def _settle(sim: _Sim, u: float) -> float:
-    """Hold every channel at u until the temperature stops moving; returns it."""
+    """Hold every channel at u until the temperature stops moving; returns it. A chunk is longer than
+    the dead time, so "not moving" is never the input still on its way through the delay."""
     last = sim.plant.temperatures()[sim.pm.channel]
+    chunk = max(SETTLE_CHUNK_S, 2.0 * float(getattr(sim.plant, "dead_time_s", 0.0) or 0.0))
     t = 0.0
     while t < MAX_SETTLE_S:
-        y = sim.run(lambda _t: u, u, SETTLE_CHUNK_S)[-1]
-        t += SETTLE_CHUNK_S
+        y = sim.run(lambda _t: u, u, chunk)[-1]
+        t += chunk
         if abs(y - last) <= SETTLED_REL * max(1.0, abs(y)):
             return float(y)
         last = y

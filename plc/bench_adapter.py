@@ -10,11 +10,9 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-ST_LIB = ROOT / "st_lib"
-EXCLUDED = ("shim/twincat/",)
+from plc.library_program import library_sources
+
 CYCLE_BUDGET_US = 10_000.0  # a 10 ms PLC cycle
 SCANS_FULL = 2000
 SCANS_QUICK = 300
@@ -37,15 +35,6 @@ MODES = (
     Mode("query table (13x13, bilinear), no explain",
          "sFz.bQueryTable := TRUE; sFz.bExplainInQueryMode := FALSE;"),
 )
-
-
-def library_sources() -> list[tuple[str, str]]:
-    out = []
-    for path in sorted(ST_LIB.rglob("*.st")):
-        rel = path.relative_to(ST_LIB).as_posix()
-        if not any(rel.startswith(x) for x in EXCLUDED):
-            out.append((str(path.relative_to(ROOT)), path.read_text()))
-    return out
 
 
 def program(settings: str, with_adapter: bool) -> str:

@@ -16,7 +16,7 @@ TS = 0.2  # control and task cycle of these tests, s
 MODE_ACTIVE, MODE_TUNE = 2, 5
 STATE_ACTIVE, STATE_TUNING, STATE_TUNED, STATE_ERROR = 2, 5, 6, 8
 TUNE_READY, TUNE_ERROR = 4, 5
-RULE_AUTO, RULE_CHR, RULE_COHEN_COON, RULE_SIMC = 0, 1, 2, 3
+RULE_AUTO, RULE_CHR, RULE_COHEN_COON, RULE_SIMC, RULE_AMIGO = 0, 1, 2, 3, 4
 
 PROGRAM = controller_program()
 
@@ -122,6 +122,9 @@ def rule_values(rule: int, ks: float, tu: float, tg: float, vmax: float, dy: flo
         r = tu / tg
         tv = 4 * tu / (11 + 2 * r)
         return (1 / ks) * (1 / r) * (4 / 3 + r / 4), tu * (32 + 6 * r) / (13 + 8 * r), tv, c_td * tv
+    if rule == RULE_AMIGO:  # Astrom & Hagglund 2004
+        tv = 0.5 * tu * tg / (0.3 * tu + tg)
+        return (0.2 + 0.45 * tg / tu) / ks, tu * (0.4 * tu + 0.8 * tg) / (tu + 0.1 * tg), tv, c_td * tv
     tauc = tauc_factor * tu
     return tg / (ks * (tauc + tu)), min(tg + tu / 3, 4 * (tauc + tu)), 0.0, 0.0
 
@@ -137,9 +140,9 @@ def identified(drv: ScanDriver) -> dict[str, float]:
 @pytest.mark.parametrize(
     ("k", "t", "l", "w", "dy", "expected_rule"),
     [
-        (0.9, 100.0, 10.0, 80.0, 100.0, RULE_SIMC),        # lag dominated (hot end / bed like), tau = 0.09
-        (2.0, 23.4, 10.6, 100.0, 50.0, RULE_COHEN_COON),   # seed 003 nozzle T and L, tau = 0.31
-        (1.0, 20.0, 30.0, 70.0, 100.0, RULE_SIMC),         # delay dominated, tau = 0.6
+        (0.9, 100.0, 10.0, 80.0, 100.0, RULE_AMIGO),       # lag dominated (hot end / bed like), tau = 0.09
+        (2.0, 23.4, 10.6, 100.0, 50.0, RULE_AMIGO),        # seed 003 nozzle T and L, tau = 0.31
+        (1.0, 20.0, 30.0, 70.0, 100.0, RULE_AMIGO),        # delay dominated, tau = 0.6
     ],
 )
 @pytest.mark.parametrize("ms_max", [0.0, MS_MAX], ids=["formula", "ms-limited"])
@@ -174,7 +177,7 @@ def test_fopdt_identified_within_10_percent_and_auto_rule(uut, k, t, l, w, dy, e
           f"Ms {got['fMsTuned']:.2f} on the identified model")
 
 
-@pytest.mark.parametrize("rule", [RULE_CHR, RULE_COHEN_COON, RULE_SIMC])
+@pytest.mark.parametrize("rule", [RULE_CHR, RULE_COHEN_COON, RULE_SIMC, RULE_AMIGO])
 def test_selected_rule_produces_documented_values(uut, rule) -> None:
     plant = Fopdt(k=1.5, t=60.0, l=12.0)
     run_tune(uut, plant, w=120.0, y_tune=80.0, rule=rule)

@@ -18,7 +18,7 @@ from tests.test_lib_tuner import Fopdt
 IDLE, ACTIVE = 0, 2
 TS = 0.1
 K, T, L = 0.5916, 23.4, 10.6  # seed 003 (scenario seed003_hotend_fuzzy), identified = true here
-PID_SET = (5.32, 22.2, 3.58)  # the set the self-tuner writes for this plant (docs/scorecard.md)
+PID_SET = (5.32, 22.2, 3.58)  # TUNE's set with the paper's rule (Cohen-Coon), as the seed 003 scenarios tune
 W0, W1 = 160.0, 200.0
 STEP_AT, HORIZON = 60.0, 300.0
 BAND = 0.02

@@ -140,7 +140,7 @@ def identified(drv: ScanDriver) -> dict[str, float]:
 @pytest.mark.parametrize(
     ("k", "t", "l", "w", "dy", "expected_rule"),
     [
-        (0.9, 100.0, 10.0, 80.0, 100.0, RULE_AMIGO),       # lag dominated (hot end / bed like), tau = 0.09
+        (0.9, 100.0, 10.0, 80.0, 100.0, RULE_SIMC),        # lag dominated (hot end / bed like), tau = 0.09
         (2.0, 23.4, 10.6, 100.0, 50.0, RULE_AMIGO),        # seed 003 nozzle T and L, tau = 0.31
         (1.0, 20.0, 30.0, 70.0, 100.0, RULE_AMIGO),        # delay dominated, tau = 0.6
     ],

@@ -1,9 +1,9 @@
 """The self-tuning study (plc.tuning_study): what TUNE's AUTO set is worth on the true plant.
 
 Every plant: TUNE ends READY, the set it writes is robust (Ms <= 2 on the true plant, whatever the
-identification did) and its Ms on its own model is published; the goals hold: Ms <= 1.6 and load IAE
-within 1.1 x the better of SIMC/AMIGO on the true model. A plant that misses them would be listed in
-SHORTFALLS as an expected failure stating its figures.
+identification did) and its Ms on its own model is published; the goals: Ms <= 1.6 and load IAE within
+1.1 x the better of SIMC/AMIGO on the true model. The plants that miss them are expected failures that
+state their figures (SHORTFALLS), so an improvement shows.
 """
 
 from __future__ import annotations
@@ -13,7 +13,13 @@ import pytest
 from plc.tuning_study import IAE_RATIO_GOAL, MS_GOAL, PLANTS, study, table
 
 ROBUST_MS = 2.0
-SHORTFALLS: dict[str, str] = {}  # plant label -> why its goals are not met yet (none today)
+SHORTFALLS = {
+    "FOPDT tau 0.05": "below fTauLagDominated AUTO takes SIMC PI (a derivative reacting to the PV that falls "
+    "when a hot end's heater fails delays the heater monitor past L + 5 s): Ms 1.67, IAE 1.37 x AMIGO's",
+    "FOPDT tau 0.9": "the record holds only about 5 points of the 14 s rise after a 90 s delay: identified K "
+    "2.26 / T 12.6 for 2.0 / 10.0, IAE 1.12 x AMIGO's",
+}
+LAG_DOMINATED_TAU = 0.1  # the library's fTauLagDominated default
 
 
 def _cases():
@@ -27,7 +33,7 @@ def _cases():
 def test_auto_tuning_is_robust_and_rejects_loads_like_the_best_rule(plant) -> None:
     row = study(plant)
     print("\n".join(table([row])))
-    assert row.rule == "AMIGO"
+    assert row.rule == ("SIMC" if row.tau < LAG_DOMINATED_TAU else "AMIGO")
     assert row.ms <= ROBUST_MS, f"{plant.label}: Ms {row.ms:.2f} on the true plant"
     assert row.ms_on_own_model <= MS_GOAL
     assert row.ms <= MS_GOAL, f"{plant.label}: Ms {row.ms:.2f} > {MS_GOAL}"

@@ -242,20 +242,9 @@ def _mutants(text: str, code: list[bool]) -> dict[str, list[tuple[int, str]]]:
     return out
 
 
-ALL_LITERAL_CALL = re.compile(r"^\s*\w+\s*:=\s*\w+\((?P<args>[^()]*)\);")
-
-
-def _all_literal_call(line: str) -> bool:
-    m = ALL_LITERAL_CALL.match(line)
-    return bool(m) and not re.search(r"[A-Za-z_]", re.sub(r"\b(?:TRUE|FALSE)\b", "", m["args"]))
-
-
 def test_seeded_type_errors_in_the_corpus_are_found() -> None:
-    """Mutation check: seeded MatIEC type errors in known-good programs are reported on their line.
-
-    Every dropped conversion must be found; an integer written for a real literal may be missed only
-    in a call whose arguments are all literals (MAX(1, 10.0)): no operand has a declared type and the
-    typer deliberately does not judge literal against literal."""
+    """Mutation check: seeded MatIEC type errors in known-good programs are reported on their line, every
+    one (iec2c refuses an integer literal among real ones even in MAX(1, 10.0) or 1 + 0.5)."""
     from plc.checker.lexical import scan
 
     shared = shared_dir()
@@ -272,7 +261,7 @@ def test_seeded_type_errors_in_the_corpus_are_found() -> None:
                 counts[kind][0] += hit
                 counts[kind][1] += 1
                 source_line = mutated.splitlines()[line - 1]
-                if not hit and (kind == "conversion dropped" or not _all_literal_call(source_line)):
+                if not hit:
                     unexplained.append(f"{path.name}:{line}: {kind}: {source_line.strip()}")
     print("seeded type errors (found, seeded):", counts)
     assert counts["conversion dropped"][1] > 10 and counts["real literal written as integer"][1] > 30

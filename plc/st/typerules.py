@@ -76,7 +76,14 @@ def arith_type(ctx, a: Ex, b: Ex, op: str, node: Node) -> Type:
     if not (ta.is_num() and tb.is_num()):
         raise ctx.err(ctx.src, node, f"Data type mismatch for '{op}' expression")
     if ta.kind in ("anyint", "anyreal") and tb.kind in ("anyint", "anyreal"):
-        return ANY_REAL if ANY_REAL in (ta, tb) else ANY_INT
+        if ta.kind != tb.kind:  # iec2c: `1 + 0.5` has no type (an integer and a real literal)
+            raise ctx.err(
+                ctx.src,
+                node,
+                f"Data type mismatch for '{op}' expression (integer literal with a real literal: "
+                "write both as real literals)",
+            )
+        return ta
     if ta.kind in ("anyint", "anyreal"):
         ta, tb = tb, ta
         a, b = b, a
@@ -240,7 +247,14 @@ def same_array(a: Type, b: Type) -> bool:
 def common_arg_type(ctx, args: list[Ex], node: Node, name: str) -> Type:
     typed = [a.t for a in args if a.t.kind not in ("anyint", "anyreal")]
     if not typed:
-        return ANY_REAL if any(a.t.kind == "anyreal" for a in args) else ANY_INT
+        kinds = {a.t.kind for a in args}
+        if kinds == {"anyint", "anyreal"}:  # iec2c: MAX(1, 10.0) resolves to no overload
+            raise ctx.err(
+                ctx.src,
+                node,
+                f"{name}: integer and real literals mixed (write them all as real literals, e.g. 1.0)",
+            )
+        return ANY_REAL if "anyreal" in kinds else ANY_INT
     t = typed[0]
     for o in typed[1:]:
         if o.name != t.name:

@@ -39,6 +39,8 @@ ROLE_PATTERNS: dict[str, tuple[str, ...]] = {
     "pwm_heat": (r"bPwmHeatZone{n}", r"bHeatZone{n}", r"bPwmZone{n}", r"bPwm{n}"),
     "pwm_cool": (r"bPwmCoolZone{n}", r"bCoolZone{n}"),
     "state": (r"nStateZone{n}", r"nCtrlStateZone{n}", r"nState{n}"),
+    # the time the controller counts per scan (its TASK interval): a stepped run's plant step must match it
+    "task_cycle": (r"fTaskCycleTimeZone{n}",),
     "tune_state": (r"nTuneStateZone{n}", r"nTuneZone{n}"),
     "alarm": (r"dwAlarmZone{n}", r"nAlarmZone{n}", r"wAlarmZone{n}", r"dwAlarm{n}"),
     "error": (r"nErrorIdZone{n}", r"nErrorZone{n}", r"nErrorId{n}"),

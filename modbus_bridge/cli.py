@@ -122,7 +122,9 @@ def main_run(args: argparse.Namespace) -> int:
         )
     try:
         setup = HarnessSetup.default()
-        check_bindings(scenario, setup.bindings(scenario), setup.codes, setup.regmap)
+        check_bindings(
+            scenario, setup.bindings(scenario), setup.codes, setup.regmap, stepped=not args.realtime
+        )
     except RegisterMapError as exc:
         raise UserError(str(exc)) from None
     out_dir = Path(args.out) if args.out else OUT_DIR / slug(scenario.name)

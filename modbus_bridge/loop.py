@@ -293,9 +293,14 @@ def required_roles(scenario: Scenario, zone: Zone) -> list[str]:
 
 
 def check_bindings(
-    scenario: Scenario, bindings: dict[int, ZoneBinding], codes: ControllerCodes, regmap: RegisterMap
+    scenario: Scenario,
+    bindings: dict[int, ZoneBinding],
+    codes: ControllerCodes,
+    regmap: RegisterMap,
+    stepped: bool = True,
 ) -> None:
-    """Before anything starts: every register and mode the scenario needs exists (else one clear line)."""
+    """Before anything starts: every register and mode the scenario needs exists, and a stepped run's plant
+    step is the PLC time its scans count (else one clear line)."""
     for zone in scenario.zones:
         if zone.plc_zone not in bindings:
             raise RegisterMapError(
@@ -314,6 +319,8 @@ def check_bindings(
                     f"zone '{zone.name}': the application's raw inputs span 0..{RAW_FULL_SCALE}: "
                     f"set sensor bits = {RAW_FULL_SCALE.bit_length()}"
                 )
+        if stepped:
+            check_step_matches_task_cycle(scenario, zone, b, regmap)
         for ph in zone.phases:
             for tag in ph.writes:
                 client_tag = regmap[tag]  # raises "tag ... is not in the register map"
@@ -326,6 +333,30 @@ def check_bindings(
                 )
             if ph.until == "tuned" and "TUNED" not in codes.states:
                 raise RegisterMapError("E_CtrlState has no TUNED member: cannot wait for the end of tuning")
+
+
+STEP_MATCH_REL = 1e-6
+
+
+def check_step_matches_task_cycle(
+    scenario: Scenario, zone: Zone, b: ZoneBinding, regmap: RegisterMap
+) -> None:
+    """Stepped runs: the plant steps dt_s while the PLC scans scans_per_step times, and the controller
+    counts its task cycle per scan; if the two disagree every identified time and every timer is off by
+    their ratio."""
+    if not b.has("task_cycle"):
+        return
+    tag = b["task_cycle"]
+    cycle = next((ph.writes[tag] for ph in zone.phases[:1] if tag in ph.writes), regmap[tag].meta.default)
+    if cycle is None:
+        return
+    plc_time = scenario.scans_per_step * float(cycle)
+    if abs(plc_time - scenario.dt_s) > STEP_MATCH_REL * max(scenario.dt_s, plc_time):
+        raise RegisterMapError(
+            f"zone '{zone.name}': a plant step of {scenario.dt_s:g} s is {scenario.scans_per_step} "
+            f"scan(s) of {float(cycle):g} s ({tag}) = {plc_time:g} s of PLC time: set [plc] scans_per_step = "
+            f"{scenario.dt_s / float(cycle):g} (or dt_s = {plc_time:g})"
+        )
 
 
 ProgressFn = Callable[[float, float], None]
@@ -543,7 +574,7 @@ async def close_loop(
     """Run the scenario against one PLC. PLC errors end the run with `error` set; the trace so far is kept.
     `should_stop` is asked every step; a reason ends the run the same way, `interrupted` set (so does a
     cancellation of the task)."""
-    check_bindings(scenario, bindings, codes, client.regmap)
+    check_bindings(scenario, bindings, codes, client.regmap, stepped=not realtime)
     run = _LoopCloser(scenario, variant, client, bindings, codes, realtime, speed)
     horizon = max_plant_time_s or scenario.nominal_duration_s
     dt = scenario.dt_s

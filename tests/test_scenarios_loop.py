@@ -103,6 +103,22 @@ def test_missing_tag_is_one_clear_line():
         check_bindings(dataclasses.replace(sc, zones=[bad]), s.bindings(sc), s.codes, s.regmap)
 
 
+def test_a_plant_step_that_is_not_the_plc_time_of_its_scans_is_refused():
+    """A stepped run whose plant step differs from scans_per_step x the controller's task cycle would
+    identify every time constant off by their ratio; every shipped scenario matches."""
+    s = HarnessSetup.default()  # the application, whose zones count fTaskCycleTimeZone<n> per scan
+    shipped = sorted((Path(__file__).parents[1] / "modbus_bridge" / "scenarios").glob("*.toml"))
+    assert len(shipped) > 10
+    for path in shipped:
+        sc = load_scenario(path)
+        check_bindings(sc, s.bindings(sc), s.codes, s.regmap)
+    sc = load_scenario(shipped[0])
+    slow = dataclasses.replace(sc, dt_s=2 * sc.dt_s)
+    with pytest.raises(RegisterMapError, match=rf"set \[plc\] scans_per_step = {2 * sc.scans_per_step}\b"):
+        check_bindings(slow, s.bindings(slow), s.codes, s.regmap)
+    check_bindings(slow, s.bindings(slow), s.codes, s.regmap, stepped=False)  # real time: the PLC's own clock
+
+
 def free_port() -> int:
     with socket.socket() as sock:
         sock.bind(("127.0.0.1", 0))

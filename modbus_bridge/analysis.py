@@ -25,6 +25,7 @@ from .metrics import (
     disturbance_metrics,
     effort_metrics,
     error_integrals,
+    settled_noise_metrics,
     step_metrics,
 )
 
@@ -58,6 +59,17 @@ def _window(tr: ZoneTrace, rec: PhaseRecord) -> tuple[np.ndarray, np.ndarray, np
     t = np.asarray(tr.t)
     mask = (t >= rec.t_start - 1e-9) & (t < rec.t_end - 1e-9)
     return t[mask], np.asarray(tr.pv)[mask], np.asarray(tr.u)[mask], np.asarray(tr.setpoint)[mask]
+
+
+HOLD_SETTLED_SHARE = 0.5
+
+
+def _in_window(values: list[float], tr: ZoneTrace, rec: PhaseRecord) -> np.ndarray:
+    """A trace column over the phase window of `_window` (empty when the trace was not recorded)."""
+    if len(values) != len(tr.t):
+        return np.asarray([])
+    t = np.asarray(tr.t)
+    return np.asarray(values)[(t >= rec.t_start - 1e-9) & (t < rec.t_end - 1e-9)]
 
 
 def zone_metrics(result: RunResult, tr: ZoneTrace) -> list[PhaseMetrics]:
@@ -97,11 +109,19 @@ def zone_metrics(result: RunResult, tr: ZoneTrace) -> list[PhaseMetrics]:
             w = StepWindow(t=t, y=y, t0=rec.t_start, y0=rec.pv_start, y_final=rec.setpoint)
             pm.values.update(step_metrics(w))
             last_step = abs(w.step)
+            settled = rec.t_start + pm.values["settling_time_2pct_s"]
+            output, true_c = _in_window(tr.y, tr, rec), _in_window(tr.true_c, tr, rec)
+            pm.values.update(settled_noise_metrics(t, output, true_c, rec.setpoint, settled))
         elif rec.ramp_c_per_min is not None:
             pm.kind = "ramp"
             e = sp - y
             pm.values.update(error_integrals(t, e, rec.t_start))
             pm.values["max_tracking_error_c"] = float(np.max(np.abs(e)))
+        if pm.kind == "hold" and not rec.disturbances and rec.mode != "MANUAL":
+            # a hold without a step: what the noise does over its second half (the first may still settle)
+            output, true_c = _in_window(tr.y, tr, rec), _in_window(tr.true_c, tr, rec)
+            half = rec.t_start + HOLD_SETTLED_SHARE * (rec.t_end - rec.t_start)
+            pm.values.update(settled_noise_metrics(t, output, true_c, float(sp[-1]), half))
         loads = [d for d in rec.disturbances if d[1] in LOAD_KINDS]
         if loads:
             pm.kind = "disturbance" if pm.kind == "hold" else pm.kind

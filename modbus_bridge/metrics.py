@@ -10,6 +10,7 @@ is measured from the step time t0 (not from the first sample).
 Keys (units in the name): dead_time_s (first sample 2 % of the step away from y0), delay_time_s (50 %),
 rise_time_s, settling_time_2pct_s, settling_time_5pct_s, overshoot_pct, undershoot_pct, peak_c,
 iae_c_s, ise_c2_s, itae_c_s2, itse_c2_s2, ie_c_s, ss_peak_to_peak_c, ss_std_c (after the 2 % settling),
+ss_output_std_pct, ss_true_ripple_c, ss_true_offset_c (output and true temperature after the settling),
 tv_output_pct (total variation sum |u_k - u_k-1|), pwm_switches_per_min, saturation_time_s,
 max_deviation_c and recovery_time_2pct_s (load disturbances), tuning_duration_s.
 """
@@ -112,6 +113,24 @@ def steady_state_band(t: np.ndarray, y: np.ndarray, t_settled: float) -> dict[st
     if tail.size < 2:
         return {"ss_peak_to_peak_c": math.nan, "ss_std_c": math.nan}
     return {"ss_peak_to_peak_c": float(np.ptp(tail)), "ss_std_c": float(np.std(tail))}
+
+
+def settled_noise_metrics(
+    t: np.ndarray, output: np.ndarray, true_c: np.ndarray, setpoint: float, t_settled: float
+) -> dict[str, float]:
+    """What sensor noise does once the step has settled (2 %): standard deviation of the controller output
+    (%), half the peak-to-peak of the true temperature (the ripple, degC) and its mean offset from the
+    setpoint (degC). Empty when the step never settled or a trace is missing."""
+    if math.isnan(t_settled) or output.size != t.size or true_c.size != t.size:
+        return {}
+    tail = t >= t_settled
+    if np.count_nonzero(tail) < 2:
+        return {}
+    return {
+        "ss_output_std_pct": float(np.std(output[tail])),
+        "ss_true_ripple_c": float(np.ptp(true_c[tail])) / 2.0,
+        "ss_true_offset_c": float(np.mean(true_c[tail]) - setpoint),
+    }
 
 
 def disturbance_metrics(

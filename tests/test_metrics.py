@@ -13,6 +13,7 @@ from modbus_bridge.metrics import (
     effort_metrics,
     error_integrals,
     json_safe,
+    settled_noise_metrics,
     settling_time,
     step_metrics,
 )
@@ -109,6 +110,18 @@ def test_effort_metrics():
     assert m["tv_output_pct"] == pytest.approx(100.0 * 59)
     assert m["saturation_time_s"] == pytest.approx(60.0)
     assert m["pwm_switches_per_min"] == pytest.approx(59 / (59 / 60))
+
+
+def test_settled_noise_metrics_on_a_known_ripple():
+    t = np.arange(0.0, 100.0, 0.1)
+    output = 40.0 + 2.0 * np.sin(2 * np.pi * t / 10.0)  # std 2 / sqrt(2)
+    true_c = 200.3 + 0.25 * np.sin(2 * np.pi * t / 10.0)
+    got = settled_noise_metrics(t, output, true_c, 200.0, 50.0)
+    assert got["ss_output_std_pct"] == pytest.approx(2.0 / math.sqrt(2.0), rel=1e-2)
+    assert got["ss_true_ripple_c"] == pytest.approx(0.25, rel=1e-3)
+    assert got["ss_true_offset_c"] == pytest.approx(0.3, abs=1e-3)
+    assert settled_noise_metrics(t, output, true_c, 200.0, math.nan) == {}  # never settled
+    assert settled_noise_metrics(t, output[:10], true_c, 200.0, 50.0) == {}  # output not recorded
 
 
 def test_json_safe():

@@ -37,6 +37,7 @@ C_FAIL_ROWS = {
     "array_of_array",
     "power_operator",
     "ref_to_scalar_write",
+    "extra_inout_function_in_call",
 }
 
 # Probes on names OpenPLC adds to its copy of MatIEC's library (webserver/lib); judged only when

@@ -173,6 +173,13 @@ class NodeRules(CheckerBase):
             )
         elif upper in TWINCAT_OPERATORS:
             self.report(fn, f"{name}() is TwinCAT-only; MatIEC refuses it")
+        elif self.has_in_out(upper) and (outer := self._enclosing_function_call(node)) is not None:
+            self.report(
+                fn,
+                f"{name}() has VAR_IN_OUT parameters and is called inside the arguments of {outer}(): "
+                "iec2c generates C that does not compile (an undeclared temporary); call it in an "
+                "assignment of its own and pass the variable",
+            )
         elif "_TO_" in upper:
             source = upper.split("_TO_")[0]
             if self.is_enum(source):
@@ -211,6 +218,29 @@ class NodeRules(CheckerBase):
             return None
         name = cur.child_by_field_name("name")
         return self.index.pous.get(self.ps.node_text(name).upper()) if name is not None else None
+
+    def has_in_out(self, name: str) -> bool:
+        """Whether `name` is a FUNCTION of the program with VAR_IN_OUT parameters."""
+        pou = self.index.pous.get(name.upper())
+        if pou is None or pou.kind != "function":
+            return False
+        return any(v.section == "inout" for v in pou.vars.values())
+
+    def _enclosing_function_call(self, node: Node) -> str | None:
+        """The function whose arguments hold this call (None: the call stands in a statement or an
+        expression of its own, or in the arguments of a function block instance, which iec2c builds)."""
+        pou = self._enclosing_pou(node)
+        cur = node.parent
+        while cur is not None and not cur.type.endswith("_statement"):
+            if cur.type == "call_expression":
+                fn = cur.child_by_field_name("function")
+                if fn is None or fn.type != "identifier":
+                    return None
+                outer = self.ps.node_text(fn)
+                is_instance = pou is not None and outer.lower() in pou.vars
+                return None if is_instance else outer
+            cur = cur.parent
+        return None
 
     def is_enum(self, name: str) -> bool:
         t = self.named_type(name)

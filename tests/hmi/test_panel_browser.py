@@ -196,6 +196,8 @@ def test_tuning_reject_restores_and_accept_keeps(stack: Stack, pg) -> None:
     assert restored == pytest.approx(before)
     # second run: accept keeps the tuned set
     pg.goto(stack.url + "/zone/1")
+    # the faceplate shows the live state once the page's connection is up: a click before that is lost
+    expect()(pg.get_by_test_id("fp-state")).to_have_text("TUNED", timeout=20000)
     pg.get_by_test_id("mode-IDLE").click()
     expect()(pg.get_by_test_id("fp-state")).to_have_text("IDLE")
     expect()(pg.get_by_text("mode IDLE: accepted by the PLC")).to_be_visible()  # the write is complete

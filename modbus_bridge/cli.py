@@ -93,7 +93,7 @@ def check_out_dir(out_dir: Path) -> None:
 def main_run(args: argparse.Namespace) -> int:
     from .analysis import run_metrics
     from .client import PlcError
-    from .loop import check_bindings
+    from .preflight import check_bindings
     from .progress import RunProgress, quiet_libraries
     from .report import slug, summary_rows, text_table, write_reports
     from .runner import FleetJob, HarnessSetup, parse_host_port, run_fleet, run_variants

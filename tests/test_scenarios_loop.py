@@ -12,7 +12,8 @@ import pytest
 
 from modbus_bridge.binding import ControllerCodes, resolve_zone
 from modbus_bridge.client import PlcClient, PlcError
-from modbus_bridge.loop import check_bindings, close_loop
+from modbus_bridge.loop import close_loop
+from modbus_bridge.preflight import check_bindings
 from modbus_bridge.regmap import RegisterMapError, load_register_map
 from modbus_bridge.runner import HarnessSetup, run_variants
 from modbus_bridge.scenario import Variant, load_scenario

@@ -24,6 +24,8 @@ PANEL_ROLES: dict[str, str] = {
     "x_used": "fXUsedZone{n}",
     "tune_rule": "nTuneRuleZone{n}",
     "tune_rule_used": "nTuneRuleUsedZone{n}",
+    "fit_rms": "fTuneFitRmsZone{n}",
+    "ms_tuned": "fMsTunedZone{n}",
     "w_min": "fWMinZone{n}",
     "w_max": "fWMaxZone{n}",
     "y_min": "fYMinZone{n}",

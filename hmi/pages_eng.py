@@ -246,9 +246,14 @@ def tuning_page(zone: int = 1) -> None:
         err.set_text(f"error {err_id}: {p.poller.error_text.get(err_id, '')}" if err_id else "")
         rule = p.value(z["tune_rule_used"]) if z.has("tune_rule_used") else None
         rule_text = p.model.tune_rules.get(int(rule), str(rule)) if rule is not None else "-"
+        quality = ""
+        if z.has("fit_rms") and p.value(z["fit_rms"]):
+            quality += f"; fit rms {value_text(z['fit_rms'])} of the rise"
+        if z.has("ms_tuned") and p.value(z["ms_tuned"]):
+            quality += f"; Ms of the set {value_text(z['ms_tuned'])} (robust <= 1.6)"
         ident.set_text(f"identified: K = {value_text(z['ks']) if z.has('ks') else '-'}, "
                        f"T = {value_text(z['tg']) if z.has('tg') else '-'}, "
-                       f"L = {value_text(z['tu']) if z.has('tu') else '-'}; rule used: {rule_text}")
+                       f"L = {value_text(z['tu']) if z.has('tu') else '-'}; rule used: {rule_text}{quality}")
         rows = [{"gain": z[r], "before TUNE": fmt(ses.before.get(z[r])) if ses.before else "-",
                  "proposed": value_text(z[r])} for r in gains]
         if rows != table.rows:

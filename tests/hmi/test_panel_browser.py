@@ -189,6 +189,7 @@ def test_tuning_reject_restores_and_accept_keeps(stack: Stack, pg) -> None:
     ident = pg.get_by_test_id("tune-ident")
     expect()(ident).not_to_contain_text(re.compile(r"K = 0 degC"))  # seed 003: K 0.59 degC/%
     assert "rule used: AUTO" not in ident.inner_text()  # the rule AUTO picked
+    expect()(ident).to_contain_text(re.compile(r"fit rms \S+ % of the rise; Ms of the set \d"))
     shot(pg, "tuning", docs=True)
     pg.get_by_test_id("tune-reject").click()
     expect()(pg.get_by_test_id("tune-decided")).to_contain_text("rejected")

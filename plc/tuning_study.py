@@ -14,11 +14,9 @@ the library to it.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
-import numpy as np
-
+from modbus_bridge.optimise.experiment import PidGains
 from plc.library_program import ScanDriver, controller_program, load_program
 
 TS = 0.2  # control and task cycle, s
@@ -31,10 +29,8 @@ LOAD_PCT = 10.0
 GAIN_C_PER_PCT = 2.0
 SETTLE_SUMS = 8.0  # time at the setpoint before the load step, in plant total times
 IAE_WINDOW_SUMS = 12.0
-TD_FILTER_SHARE = 0.25  # Td = share * Tv, as the library's fTuneTd default
 MS_GOAL = 1.6
 IAE_RATIO_GOAL = 1.1
-OMEGA_POINTS = 1500
 RULE_NAMES = {0: "AUTO", 1: "CHR", 2: "Cohen-Coon", 3: "SIMC", 4: "AMIGO"}
 
 
@@ -75,14 +71,6 @@ PLANTS: tuple[StudyPlant, ...] = (
 )
 
 
-@dataclass(frozen=True)
-class Gains:
-    kp: float
-    tn: float
-    tv: float
-    td: float
-
-
 @dataclass
 class StudyRow:
     plant: StudyPlant
@@ -90,7 +78,7 @@ class StudyRow:
     fit: tuple[float, float, float]  # true plant: K, L, T of that fit
     identified: tuple[float, float, float]  # the tuner's Ks, Tu, Tg
     rule: str
-    gains: Gains
+    gains: PidGains
     ms: float
     ms_on_own_model: float  # fMsTuned, what the tuner published
     iae: float
@@ -165,10 +153,10 @@ def self_tune(plant: StudyPlant) -> tuple[ScanDriver, int]:
     return drv, drv.get("nTuneState")
 
 
-def load_iae(plant: StudyPlant, gains: Gains) -> float:
+def load_iae(plant: StudyPlant, gains: PidGains) -> float:
     """IAE (degC s) after a load step, the loop settled at the setpoint with these gains."""
     drv, sim = _driver(), _Plant(plant)
-    for name, value in (("fKp", gains.kp), ("fTn", gains.tn), ("fTv", gains.tv), ("fTd", gains.td)):
+    for name, value in (("fKp", gains.kp), ("fTn", gains.tn), ("fTv", gains.tv), ("fTd", gains.td_s)):
         drv.set(f"sPar.{name}", value)
     drv.set("fbUut.fW1", SETPOINT_C)
     drv.set("nMode", MODE_ACTIVE)
@@ -181,33 +169,19 @@ def load_iae(plant: StudyPlant, gains: Gains) -> float:
 
 
 def study(plant: StudyPlant) -> StudyRow:
-    from modbus_bridge.optimise.robustness import amigo, simc
-    from modbus_bridge.plants.response import (
-        PlantModel,
-        fit_fopdt,
-        frequency_response,
-        max_sensitivity,
-        pid_frequency_response,
-        step_response,
-    )
+    from modbus_bridge.optimise.robustness import amigo, loop_model_of, simc
+    from modbus_bridge.plants.response import PlantModel
 
-    pm = PlantModel("nlag", plant.params(), 0)
-    t, s, _ = step_response(pm, SETPOINT_C, dt=0.1)
-    fit = fit_fopdt(t, s)
-    omegas = np.logspace(math.log10(0.01 / plant.total_time_s), math.log10(math.pi / TS), OMEGA_POINTS)
-    loop_plant = frequency_response(pm, SETPOINT_C, omegas) * np.exp(-1j * omegas * TS / 2.0)
-
-    def ms(g: Gains) -> float:
-        return max_sensitivity(pid_frequency_response(g.kp, g.tn, g.tv, g.td, omegas) * loop_plant)
+    model = loop_model_of(PlantModel("nlag", plant.params(), 0), SETPOINT_C, TS)
+    fit = model.fit
 
     drv, state = self_tune(plant)
     if state != TUNE_READY:
         raise RuntimeError(f"{plant.label}: TUNE ended in error {drv.get('fbUut.nErrorId')}")
-    gains = Gains(*(drv.get(f"sPar.{n}") for n in ("fKp", "fTn", "fTv", "fTd")))
+    gains = PidGains(*(drv.get(f"sPar.{n}") for n in ("fKp", "fTn", "fTv", "fTd")))
     references = {}
-    for name, ref in (("SIMC", simc(fit)), ("AMIGO", amigo(fit))):
-        ref_gains = Gains(ref.kp, ref.tn, ref.tv, TD_FILTER_SHARE * ref.tv)
-        references[name] = (ms(ref_gains), load_iae(plant, ref_gains))
+    for name, ref in (("SIMC", simc(fit)), ("AMIGO", amigo(fit))):  # Td = Tv / 4, as fTuneTd's default
+        references[name] = (model.ms(ref), load_iae(plant, ref))
     return StudyRow(
         plant=plant,
         tau=fit.tau,
@@ -215,7 +189,7 @@ def study(plant: StudyPlant) -> StudyRow:
         identified=(drv.get("sPar.fKs"), drv.get("sPar.fTu"), drv.get("sPar.fTg")),
         rule=RULE_NAMES.get(drv.get("nRuleUsed"), "?"),
         gains=gains,
-        ms=ms(gains),
+        ms=model.ms(gains),
         ms_on_own_model=drv.get("sPar.fMsTuned"),
         iae=load_iae(plant, gains),
         references=references,

@@ -72,16 +72,19 @@ class LoopModel:
 
 
 def loop_model(sc: Scenario) -> LoopModel:
-    pm = plant_model(sc)
     _, r = operating_point(sc)
-    t, s, _ = step_response(pm, r, dt=min(sc.dt_s, 0.1))
+    return loop_model_of(plant_model(sc), r, sc.dt_s, sc.zones[0].sensor.lag_s)
+
+
+def loop_model_of(pm: PlantModel, temp_c: float, dt: float, sensor_lag_s: float = 0.0) -> LoopModel:
+    """The loop model of a plant at temp_c, sampled every dt, with a sensor lag."""
+    t, s, _ = step_response(pm, temp_c, dt=min(dt, 0.1))
     fit = fit_fopdt(t, s)
     slowest = fit.time_constant_s + fit.dead_time_s
-    omegas = np.logspace(math.log10(0.01 / slowest), math.log10(math.pi / sc.dt_s), OMEGA_POINTS)
-    g = frequency_response(pm, r, omegas)
-    lag = sc.zones[0].sensor.lag_s
-    g = g / (lag * 1j * omegas + 1.0) * np.exp(-1j * omegas * sc.dt_s / 2.0)
-    return LoopModel(omegas, g, fit, r)
+    omegas = np.logspace(math.log10(0.01 / slowest), math.log10(math.pi / dt), OMEGA_POINTS)
+    g = frequency_response(pm, temp_c, omegas)
+    g = g / (sensor_lag_s * 1j * omegas + 1.0) * np.exp(-1j * omegas * dt / 2.0)
+    return LoopModel(omegas, g, fit, temp_c)
 
 
 def simc(fit: FopdtFit) -> PidGains:

@@ -67,11 +67,14 @@ def controller_program() -> str:
     return build_program(CONTROLLER_PROGRAM_DECLS, CONTROLLER_PROGRAM_BODY)
 
 
-def load_program(program_text: str, extra: list[tuple[str, str]] | None = None) -> Any:
-    """The library, `extra` sources and the program, compiled and loaded into the soft-PLC."""
+def load_program(
+    program_text: str, extra: list[tuple[str, str]] | None = None, filename: str = "generated_program.st"
+) -> Any:
+    """The library, `extra` sources and the program (named `filename` in diagnostics), compiled and
+    loaded into the soft-PLC."""
     from plc.st.compiler import load_application
 
-    sources = library_sources() + (extra or []) + [("generated_program.st", program_text)]
+    sources = library_sources() + (extra or []) + [(filename, program_text)]
     return load_application(sources)
 
 

@@ -21,16 +21,16 @@ from plc.library_program import (  # noqa: F401 - re-exported for the tests
     controller_program,
     library_files,
     library_sources,
+    load_program,
 )
 
 
 def load_test_app(program_text: str, extra: list[tuple[str, str]] | None = None) -> Any:
     try:
-        from plc.st.compiler import load_application
+        import plc.st.compiler  # noqa: F401
     except ImportError as exc:  # soft-PLC not there yet
         pytest.skip(f"soft-PLC compiler not available: {exc}")
-    sources = library_sources() + (extra or []) + [("tests/generated_test_program.st", program_text)]
-    return load_application(sources)
+    return load_program(program_text, extra, filename="tests/generated_test_program.st")
 
 
 def f32(value: float) -> float:

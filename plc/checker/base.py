@@ -26,11 +26,8 @@ class CheckerBase:
     def declared_type(self, spec: Node | None) -> Type | None:
         """The type a type node of this file names, as the compiler's index builds it (None: unknown)."""
         if spec is None or spec.type not in ("identifier", "elementary_type", "array_type", "string_type"):
-            return None
-        try:
-            t = self.index.type_from_spec(spec, self.ps)
-        except CompileError:
-            return None
+            return None  # an inline enum or struct would register its members again
+        t = self.index.declared_type(spec, self.ps)
         return None if t.kind == UNKNOWN else t
 
     def named_type(self, name: str) -> Type | None:

@@ -105,12 +105,9 @@ class Index(TypeIndex):
     def leave_out_unknowns(self) -> None:
         """Mark POUs that use an UNKNOWN type, or name a POU so marked, as not to be typed."""
         out = {name for name, pou in self.pous.items() if any(map(has_unknown, pou.types()))}
+        names = {name: pou.src.identifiers_in(pou.node) for name, pou in self.pous.items()}
         while True:
-            more = {
-                name
-                for name, pou in self.pous.items()
-                if name not in out and out & pou.src.identifiers_in(pou.node)
-            }
+            more = {name for name, used in names.items() if name not in out and out & used}
             if not more:
                 break
             out |= more

@@ -74,6 +74,10 @@ BODY = """  IF NOT bInit THEN
 def new_driver(plant_scaling: bool = False, setup=None) -> ScanDriver:
     drv = ScanDriver(load_test_app(build_program(DECLS, BODY), extra=fuzzy_sources()))
     drv.set("bPlantScaling", plant_scaling)
+    # these tests pin the tables as printed and the configured ratio bounds; the symmetric use and the
+    # Ms bound on top of them are tested in test_fuzzy_robust.py
+    drv.set("sFz.bSymmetric", False)
+    drv.set("sFz.fMsMax", 0.0)
     if setup:
         setup(drv)
     return drv

@@ -33,7 +33,13 @@ class RefPid:
         if self.x_prev is None:
             self.x_prev, self.kp_prev = x, self.kp
         if self.kp != self.kp_prev:
-            self.i -= (self.kp - self.kp_prev) * e
+            old_sum = self.kp_prev * e + self.i + self.d
+            if old_sum < self.ymin:  # saturated: I moves only as far as the output would leave the limit
+                self.i = min(self.i, self.ymin - self.kp * e - self.d)
+            elif old_sum > self.ymax:
+                self.i = max(self.i, self.ymax - self.kp * e - self.d)
+            else:
+                self.i -= (self.kp - self.kp_prev) * e
         p = self.kp * e
         d = 0.0
         if self.tv > 0:
@@ -173,3 +179,26 @@ def test_sync_presets_output_and_hold_freezes(pid: ScanDriver) -> None:
     pid.set("fbPid.bHold", True)
     ys = run(pid, 30.0, [10.0, 0.0])
     assert ys == pytest.approx([ys[0], ys[0]]) and ys[0] == pytest.approx(42.2, rel=REL)
+
+
+def test_gain_change_in_saturation_leaves_the_integrator(pid: ScanDriver) -> None:
+    """A long saturation with a falling Kp (a gain scheduler on a large error) must not wind I down."""
+    configure(pid, kp=3.5, tn=50.0, tv=0.0, td=0.0, ymin=0.0, ymax=100.0)
+    run(pid, 100.0, [100.0] * 5)  # at rest, I = 0
+    run(pid, 100.0, [250.0] * 3)  # cooling down from far above: P = -525 %, output pinned at 0 %
+    i_before = pid.get("fbPid.fI")
+    for kp in (3.3, 3.0, 2.7):
+        pid.set("fbPid.fKp", kp)
+        assert run(pid, 100.0, [250.0])[-1] == 0.0
+    assert pid.get("fbPid.fI") == pytest.approx(i_before, abs=1e-6)
+    # without the saturation rule the absorption would have moved I by -(2.7 - 3.5) * -150 = -120 %
+
+
+def test_gain_change_off_the_limit_stays_bumpless(pid: ScanDriver) -> None:
+    configure(pid, kp=2.0, tn=50.0, tv=0.0, td=0.0, ymin=0.0, ymax=100.0)
+    run(pid, 100.0, [100.0] * 3)
+    pid.set("fbPid.fI", 40.0)
+    y0 = run(pid, 100.0, [95.0])[-1]  # 2 * 5 + 40 + I step
+    pid.set("fbPid.fKp", 3.0)
+    y1 = run(pid, 100.0, [95.0])[-1]
+    assert y1 - y0 == pytest.approx(3.0 * 0.1 / 50.0 * 5.0, rel=1e-4)  # only the new gain's I step

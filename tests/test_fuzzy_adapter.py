@@ -55,7 +55,8 @@ BODY = """  IF NOT bInit THEN
     sCtrl.fTg := 149.0;
     bPresetOk := FC_FuzzyLoadPreset(ePreset := eFUZZY_PRESET_TEXTBOOK, sRules := sFz.sRules);
     IF bPlantScaling THEN
-      bScalingOk := FC_FuzzyScalingFromPlant(fEcFilterMaxRatio := 1.0, sCtrlParam := sCtrl, sFuzzyParam := sFz);
+      bScalingOk := FC_FuzzyScalingFromPlant(fEcFilterMaxRatio := 1.0, sCtrlParam := sCtrl,
+                                             sFuzzyParam := sFz);
     END_IF;
     bInit := TRUE;
   END_IF;

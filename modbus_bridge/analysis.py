@@ -40,6 +40,8 @@ TUNE_KEYS = {
     "kp_cool": "tuned_kp_cool_pct_per_c",
     "tn_cool": "tuned_tn_cool_s",
     "tv_cool": "tuned_tv_cool_s",
+    "t_filter": "tuned_filter_s",
+    "ms": "tuned_ms",
 }
 
 

@@ -55,6 +55,8 @@ ROLE_PATTERNS: dict[str, tuple[str, ...]] = {
     "ks": (r"fKsZone{n}",),
     "tu": (r"fTuZone{n}",),
     "tg": (r"fTgZone{n}",),
+    "t_filter": (r"fTFilterTunedZone{n}",),
+    "ms": (r"fMsTunedZone{n}",),
     "kp_eff": (r"fFuzzyKpZone{n}", r"fKpEffZone{n}", r"fKpEffectiveZone{n}"),
     "tn_eff": (r"fFuzzyTnZone{n}", r"fTnEffZone{n}", r"fTnEffectiveZone{n}"),
     "tv_eff": (r"fFuzzyTvZone{n}", r"fTvEffZone{n}", r"fTvEffectiveZone{n}"),

@@ -40,7 +40,9 @@ GAIN_ROLES = (
     "tu",
     "tg",
 )
-TUNED_ROLES = ("kp", "tn", "tv", "kp_cool", "tn_cool", "tv_cool", "ks", "tu", "tg")
+# read with the gains but kept only as tuning results (no trace): the filter TUNE sized and its set's Ms
+TUNED_ONLY_ROLES = ("t_filter", "ms")
+TUNED_ROLES = ("kp", "tn", "tv", "kp_cool", "tn_cool", "tv_cool", "ks", "tu", "tg", *TUNED_ONLY_ROLES)
 PROGRESS_EVERY = 50  # plant steps between progress reports
 # plant steps between reads of gains, identified plant, state and error id (1 s at dt = 0.1 s); the state
 # is read every step while a zone waits for an event (until = "tuned")
@@ -305,7 +307,7 @@ class _ReadPlan:
             every += [b[r] for r in ("alarm", "y") if b.has(r)]
             if scenario.output_path == "pwm":
                 every += [b["pwm_heat"]] + ([b["pwm_cool"]] if b.has("pwm_cool") else [])
-            slow += [b[r] for r in GAIN_ROLES if b.has(r)]
+            slow += [b[r] for r in (*GAIN_ROLES, *TUNED_ONLY_ROLES) if b.has(r)]
         return _ReadPlan(every, status, slow, [n for n in every if client.regmap[n].is_bit])
 
 

@@ -60,3 +60,30 @@ def test_an_unstable_loop_is_far_above_any_limit(fn: ScanDriver) -> None:
         fn.set(name, value)
     fn.scan()
     assert fn.get("fMs") > 2.0 and math.isfinite(fn.get("fMs"))
+
+
+FILTER_DECLS = """    fKs, fTu, fTg, fKp, fTn, fTv, fTd, fTFilter, fMs : REAL;"""
+FILTER_BODY = """  fMs := FC_CtrlMaxSensitivity(fKs := fKs, fTu := fTu, fTg := fTg, fKp := fKp, fTn := fTn,
+                                fTv := fTv, fTd := fTd, fTFilter := fTFilter);"""
+SEED002_SIMC = (5.19, 1.05, 194.8, 17.87, 8.4, 0.0, 0.0)  # seed 002's hot end and its SIMC PI set
+
+
+@pytest.fixture(scope="module")
+def fn_filter() -> ScanDriver:
+    return ScanDriver(load_test_app(build_program(FILTER_DECLS, FILTER_BODY)))
+
+
+@pytest.mark.parametrize("share", [0.0, 0.1, 0.5, 1.0])
+def test_the_actual_value_filter_lag_counts_against_the_robustness(fn_filter: ScanDriver, share) -> None:
+    """The loop is C F P with F = 1/(Tf s + 1): the PID acts on the filtered X."""
+    ks, l, t, kp, tn, tv, td = SEED002_SIMC
+    tf = share * l
+    for name, value in zip((*NAMES, "fTFilter"), (*SEED002_SIMC, tf), strict=True):
+        fn_filter.set(name, value)
+    fn_filter.scan()
+    w = np.logspace(-6, 3, 200_000)
+    loop = pid_frequency_response(kp, tn, tv, td, w) * ks * np.exp(-1j * w * l) / (1j * w * t + 1.0)
+    expected = max_sensitivity(loop / (1j * w * tf + 1.0))
+    assert fn_filter.get("fMs") == pytest.approx(expected, rel=0.02)
+    if share > 0.0:
+        assert fn_filter.get("fMs") > reference(*SEED002_SIMC)

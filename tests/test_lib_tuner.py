@@ -7,8 +7,10 @@ import random
 from collections import deque
 from dataclasses import dataclass, field
 
+import numpy as np
 import pytest
 
+from modbus_bridge.plants.response import max_sensitivity, pid_frequency_response
 from tests.st_helpers import ScanDriver, controller_program, load_test_app
 from tests.test_lib_max_sensitivity import reference as reference_ms
 
@@ -331,3 +333,50 @@ def test_settled_response_uses_t28_t63_of_seed_003(uut) -> None:
     assert got["fKs"] == pytest.approx(1.0, rel=0.05)
     assert got["fTu"] == pytest.approx(5.0, rel=0.10)
     assert got["fTg"] == pytest.approx(20.0, rel=0.10)
+
+
+def filter_time(kp: float, noise_pp: float, goal_pp: float, cycle: float, tu: float, share: float) -> float:
+    """docs/library.md: the actual-value filter TUNE sizes so Kp * filtered noise meets the output goal."""
+    if kp * noise_pp <= goal_pp:
+        return 0.0
+    r = goal_pp / (kp * noise_pp)
+    a = 2 * r * r / (1 + r * r)
+    return min(cycle * (1 - a) / a, share * tu)
+
+
+@pytest.mark.parametrize(("noise", "share"), [(0.5, 0.1), (0.5, 0.02), (0.05, 0.1)],
+                         ids=["sized", "at-the-lag-bound", "not-needed"])
+def test_tune_sizes_the_actual_value_filter_from_the_measured_noise(uut, noise, share) -> None:
+    plant = Fopdt(k=0.9, t=100.0, l=10.0, noise=noise, rng=random.Random(3))
+    run_tune(uut, plant, w=80.0, extra={"fTuneFilterLagShare": share})
+    assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
+    got = identified(uut)
+    noise_pp = uut.get("fbUut.fbTuner.fNoise")
+    tf = uut.get("sPar.fTFilterTuned")
+    want = filter_time(got["fKp"], noise_pp, 2.0, TS, got["fTu"], share)
+    assert tf == pytest.approx(want, rel=1e-3, abs=1e-6)
+    if noise > 0.1:
+        assert tf > 0.0
+    if share < 0.1:
+        assert tf == pytest.approx(share * got["fTu"], rel=1e-3)
+    # the tuned filter runs from the tuned set on, and the published Ms includes its lag
+    uut.set("fbUut.fX", plant.measure())
+    uut.scan()
+    assert uut.get("fbUut.fTFilterUsed") == pytest.approx(tf, abs=1e-6)
+    w = np.logspace(-6, 3, 200_000)
+    loop = (pid_frequency_response(got["fKp"], got["fTn"], got["fTv"], got["fTd"], w)
+            * got["fKs"] * np.exp(-1j * w * got["fTu"]) / (1j * w * got["fTg"] + 1.0) / (1j * w * tf + 1.0))
+    assert got["fMsTuned"] == pytest.approx(max_sensitivity(loop), rel=0.02)
+
+
+def test_the_users_filter_wins_and_tune_then_sizes_none(uut) -> None:
+    plant = Fopdt(k=0.9, t=100.0, l=10.0, noise=0.5, rng=random.Random(3))
+    uut.set("sPar.fTFilterTuned", 0.7)  # from an earlier tuning
+    run_tune(uut, plant, w=80.0, extra={"bFilter": True, "fTFilter": 0.4})
+    assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
+    assert uut.get("sPar.fTFilterTuned") == 0.0
+    assert uut.get("sPar.fTFilter") == pytest.approx(0.4)
+    assert uut.get("fbUut.fTFilterUsed") == pytest.approx(0.4)
+    uut.set("sPar.bFilter", False)
+    uut.scan()
+    assert uut.get("fbUut.fTFilterUsed") == 0.0

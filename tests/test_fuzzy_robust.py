@@ -67,7 +67,7 @@ def ms_of(kp: float, tn: float, tv: float, td: float, ks: float, tu: float, tg: 
 
 
 def box_corners(drv: ScanDriver) -> list[tuple[float, float, float]]:
-    lo_hi = [(drv.get(f"fbAd.f{k}Lo"), drv.get(f"fbAd.f{k}Hi")) for k in ("Kp", "Ki", "Kd")]
+    lo_hi = [(drv.get(f"fbAd.fbBound.f{k}Lo"), drv.get(f"fbAd.fbBound.f{k}Hi")) for k in ("Kp", "Ki", "Kd")]
     return list(itertools.product(*lo_hi))
 
 
@@ -109,7 +109,8 @@ def test_aggressive_base_set_is_scaled_until_every_reachable_set_keeps_the_limit
     assert worst <= MS_MAX * 1.01
     assert drv.get("fbAd.fMsReachable") == pytest.approx(worst, rel=0.02)
     # the adapter can still act: a quarter of the configured 0.5 .. 1.5 box is kept
-    assert drv.get("fbAd.fKpHi") / drv.get("fbAd.fKpLo") == pytest.approx(1.125 / 0.875, rel=1e-4)
+    kp_hi, kp_lo = drv.get("fbAd.fbBound.fKpHi"), drv.get("fbAd.fbBound.fKpLo")
+    assert kp_hi / kp_lo == pytest.approx(1.125 / 0.875, rel=1e-4)
 
 
 def test_robust_base_set_keeps_the_whole_box() -> None:
@@ -124,8 +125,8 @@ def test_written_gains_stay_inside_the_box_while_the_error_moves() -> None:
     drv = driver(AGGRESSIVE, MODEL, fMsMax=MS_MAX, fKe=0.5, fKec=4.0)
     rng = np.random.default_rng(3)
     drv.scan()
-    lo = drv.get("fbAd.fKpLo") * AGGRESSIVE["fKp"]
-    hi = drv.get("fbAd.fKpHi") * AGGRESSIVE["fKp"]
+    lo = drv.get("fbAd.fbBound.fKpLo") * AGGRESSIVE["fKp"]
+    hi = drv.get("fbAd.fbBound.fKpHi") * AGGRESSIVE["fKp"]
     for x in 100.0 + np.cumsum(rng.normal(0.0, 1.5, 300)):
         drv.set("fX", float(x))
         drv.scan()
@@ -136,7 +137,7 @@ def test_bound_off_keeps_the_configured_box() -> None:
     drv = driver(AGGRESSIVE, MODEL, fMsMax=0.0)
     drv.scan()
     assert drv.get("fbAd.fMsReachable") == 0.0
-    assert (drv.get("fbAd.fKpLo"), drv.get("fbAd.fKpHi")) == pytest.approx((0.5, 1.5))
+    assert (drv.get("fbAd.fbBound.fKpLo"), drv.get("fbAd.fbBound.fKpHi")) == pytest.approx((0.5, 1.5))
 
 
 def test_a_new_base_set_recomputes_the_bound() -> None:

@@ -1,24 +1,42 @@
 """Model-based setpoint response (FB_CtrlHeatUp inside FB_TempController, sParam.bHeatUp): on seed 003's
-hot end (FOPDT K = 0.5916 degC/%, T = 23.4 s, L = 10.6 s) a 160 -> 200 degC step with the self-tuned PID
-set settles within 1.05x the bang-hold bound with no overshoot to speak of; it stays fail-safe (IDLE and a
-sensor fault give 0 in the scan, also in the limit phase); without a usable model it is the plain PID.
-Model mismatch (T, L +-30 %) is measured against the goals (2 % overshoot, 1.5x the bound)."""
+hot end (FOPDT K = 0.5916 degC/%, T = 23.4 s, L = 10.6 s) a 160 -> 200 degC step with AUTO's robust PID
+set (AMIGO, Ms <= 1.6 on the model) settles within 1.05x the bang-hold bound with at most 0.5 % overshoot;
+with the plant's T and L 30 % off the model (every combination) within 1.5x the true plant's bound and 2 %
+overshoot, also at 0.2 degC sensor noise. The reference path the PID follows has no step at the switch or
+at the end. It stays fail-safe (IDLE and a sensor fault give 0 in the scan, also in the limit phase);
+without a usable model it is the plain PID."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
 
+import numpy as np
 import pytest
 
-from modbus_bridge.plants.response import PlantModel, bang_hold_bound
+from modbus_bridge.plants.response import (
+    PlantModel,
+    bang_hold_bound,
+    max_sensitivity,
+    pid_frequency_response,
+    sample_delay,
+)
 from tests.st_helpers import ScanDriver, controller_program, load_test_app
 from tests.test_lib_tuner import Fopdt
 
 IDLE, ACTIVE = 0, 2
 TS = 0.1
 K, T, L = 0.5916, 23.4, 10.6  # seed 003 (scenario seed003_hotend_fuzzy), identified = true here
-PID_SET = (5.32, 22.2, 3.58)  # TUNE's set with the paper's rule (Cohen-Coon), as the seed 003 scenarios tune
+TD_SHARE = 0.25  # fTuneTd: Td = 0.25 Tv
+ROBUST_MS = 1.6  # the feedback part's robustness goal
+
+
+def amigo(k: float, t: float, l: float) -> tuple[float, float, float]:
+    """AMIGO PID (FC_ApplyTuningRule; AUTO's rule at tau = L/(L+T) = 0.31): Kp, Tn, Tv."""
+    return ((0.2 + 0.45 * t / l) / k, l * (0.4 * l + 0.8 * t) / (l + 0.1 * t), 0.5 * l * t / (0.3 * l + t))
+
+
+PID_SET = amigo(K, T, L)
 W0, W1 = 160.0, 200.0
 STEP_AT, HORIZON = 60.0, 300.0
 BAND = 0.02
@@ -30,12 +48,13 @@ class StepResult:
     overshoot_pct: float
     t: list[float]
     y: list[float]
+    refs: list[tuple[bool, bool, float, float]]  # per scan: response active, limit phase, fWRef, X used
 
 
 def controller(heat_up: bool, model=(K, T, L)) -> ScanDriver:
     drv = ScanDriver(load_test_app(controller_program()))
     kp, tn, tv = PID_SET
-    for name, value in dict(fKp=kp, fTn=tn, fTv=tv, fTd=tv / 4, fYMin=0.0, fYMax=100.0, fWMax=300.0,
+    for name, value in dict(fKp=kp, fTn=tn, fTv=tv, fTd=TD_SHARE * tv, fYMin=0.0, fYMax=100.0, fWMax=300.0,
                             fXMax=400.0, fTempAbsHigh=300.0, fPvTimeout=0.0, fKs=model[0], fTg=model[1],
                             fTu=model[2]).items():
         drv.set(f"sPar.{name}", value)
@@ -43,11 +62,12 @@ def controller(heat_up: bool, model=(K, T, L)) -> ScanDriver:
     return drv
 
 
-def step_response(drv: ScanDriver, k: float = K, t: float = T, l: float = L) -> StepResult:
-    plant = Fopdt(k=k, t=t, l=l, x0=W0, dt=TS, noise=0.03)  # a live sensor's noise (frozen-PV check)
+def step_response(drv: ScanDriver, k: float = K, t: float = T, l: float = L,
+                  noise: float = 0.03) -> StepResult:
+    plant = Fopdt(k=k, t=t, l=l, x0=W0, dt=TS, noise=noise)  # 0.03: a live sensor's noise (frozen-PV check)
     drv.set("fbUut.fW1", W0)
     drv.set("nMode", ACTIVE)
-    ts, ys = [], []
+    ts, ys, refs = [], [], []
     for n in range(round(HORIZON / TS)):
         if n == round(STEP_AT / TS):
             drv.set("fbUut.fW1", W1)
@@ -59,16 +79,26 @@ def step_response(drv: ScanDriver, k: float = K, t: float = T, l: float = L) -> 
         if n >= round(STEP_AT / TS):
             ts.append(n * TS - STEP_AT)
             ys.append(plant.x)
+            refs.append((drv.get("fbUut.fbHeatUp.bActive"), drv.get("fbUut.fbHeatUp.bLimitPhase"),
+                         drv.get("fbUut.fbHeatUp.fWRef"), drv.get("fbUut.fXUsed")))
     outside = [tt for tt, y in zip(ts, ys, strict=True) if abs(y - W1) > BAND * (W1 - W0)]
     settling = outside[-1] + TS if outside else 0.0
     if outside and outside[-1] >= ts[-1] - TS:
         settling = math.inf
-    return StepResult(settling, max(0.0, max(ys) - W1) / (W1 - W0) * 100.0, ts, ys)
+    return StepResult(settling, max(0.0, max(ys) - W1) / (W1 - W0) * 100.0, ts, ys, refs)
 
 
 def bound_s(k: float = K, t: float = T, l: float = L) -> float:
     pm = PlantModel("fopdt", dict(gain_c_per_pct=k, time_constant_s=t, dead_time_s=l, ambient_c=W0))
     return bang_hold_bound(pm, W0, W1, TS, 200.0).settling_s
+
+
+def test_the_feedback_part_is_robust() -> None:
+    omegas = np.logspace(-4, 1, 20000)
+    kp, tn, tv = PID_SET
+    loop = pid_frequency_response(kp, tn, tv, TD_SHARE * tv, omegas) * K * sample_delay(omegas, L) \
+        / (1j * omegas * T + 1.0)
+    assert max_sensitivity(loop) <= ROBUST_MS
 
 
 def test_seed003_step_within_the_bound_without_overshoot() -> None:
@@ -123,27 +153,42 @@ def test_an_unusable_model_starts_no_response(model) -> None:
 
 
 MISMATCH = [(0.7, 1.0), (1.3, 1.0), (1.0, 0.7), (1.0, 1.3), (0.7, 1.3), (1.3, 0.7), (0.7, 0.7), (1.3, 1.3)]
-# measured with the self-tuned set (Ms 4.9 on the true model): the feedback part must become robust first
-SHORTFALLS = {
-    (0.7, 1.0): "14.6 % overshoot, not settled in 240 s (the PID alone: 12.9 %, not settled)",
-    (1.0, 0.7): "6.2 % overshoot, 81.6 s",
-    (1.0, 1.3): "not settled in 240 s (the self-tuned set oscillates with L +30 %)",
-    (0.7, 1.3): "16.5 % overshoot, not settled in 240 s",
-    (0.7, 0.7): "13.3 % overshoot, 202.7 s",
-    (1.3, 1.3): "79.6 s, 1.7x the bound of 46.9 s (overshoot 0.6 %)",
-}
+# Fopdt's noise is uniform: +-0.35 degC is 0.2 degC standard deviation, the level of the noise goals
+NOISY = 0.2 * math.sqrt(3.0)
+MISMATCH_OVERSHOOT_PCT, MISMATCH_BOUND_RATIO = 2.0, 1.5
 
 
-@pytest.mark.parametrize(
-    ("t_scale", "l_scale"),
-    [pytest.param(*s, marks=[pytest.mark.xfail(reason=f"known shortfall: {SHORTFALLS[s]}", strict=True)]
-                  if s in SHORTFALLS else [], id=f"T{s[0]}-L{s[1]}") for s in MISMATCH],
-)
-def test_model_mismatch_within_goals(t_scale: float, l_scale: float) -> None:
+def _within_goals(t_scale: float, l_scale: float, noise: float) -> None:
     t, l = T * t_scale, L * l_scale
-    res = step_response(controller(heat_up=True), t=t, l=l)
+    res = step_response(controller(heat_up=True), t=t, l=l, noise=noise)
     bound = bound_s(t=t, l=l)
-    print(f"T x{t_scale} L x{l_scale}: {res.settling_s:.1f} s (bound {bound:.1f} s), "
-          f"{res.overshoot_pct:.2f} %")
-    assert res.overshoot_pct <= 2.0
-    assert res.settling_s <= 1.5 * bound
+    print(f"T x{t_scale} L x{l_scale}, noise +-{noise:.2f} degC: {res.settling_s:.1f} s "
+          f"(bound {bound:.1f} s, {res.settling_s / bound:.2f}x), {res.overshoot_pct:.2f} %")
+    assert res.overshoot_pct <= MISMATCH_OVERSHOOT_PCT
+    assert res.settling_s <= MISMATCH_BOUND_RATIO * bound
+
+
+@pytest.mark.parametrize(("t_scale", "l_scale"), MISMATCH, ids=[f"T{t}-L{l}" for t, l in MISMATCH])
+def test_model_mismatch_within_goals(t_scale: float, l_scale: float) -> None:
+    _within_goals(t_scale, l_scale, 0.03)
+
+
+@pytest.mark.parametrize(("t_scale", "l_scale"), [(0.7, 1.3), (1.3, 1.3)], ids=["T0.7-L1.3", "T1.3-L1.3"])
+def test_model_mismatch_within_goals_with_sensor_noise(t_scale: float, l_scale: float) -> None:
+    _within_goals(t_scale, l_scale, NOISY)
+
+
+@pytest.mark.parametrize(("t_scale", "l_scale"), [(1.0, 1.0), (0.7, 1.3), (1.3, 0.7)])
+def test_the_reference_path_has_no_step(t_scale: float, l_scale: float) -> None:
+    """At the switch the path starts at the measured X; it reaches W before the response ends; between
+    scans it moves no more than the plant can (its limit-step slope K * 100 % / T)."""
+    res = step_response(controller(heat_up=True), t=T * t_scale, l=L * l_scale)
+    active = [r for r in res.refs if r[0]]
+    after = [r for r in active if not r[1]]
+    assert active and after, "no response ran"
+    first = after[0]
+    assert first[2] == pytest.approx(first[3], abs=1e-4), "the path does not start at the measured X"
+    assert after[-1][2] == pytest.approx(W1, abs=1e-3), "the path has not reached W when the response ends"
+    max_move = K * 100.0 / (T * 0.7) * TS
+    steps = [abs(b[2] - a[2]) for a, b in zip(after, after[1:], strict=False)]
+    assert max(steps) <= max_move, f"path step {max(steps):.3f} degC in one scan"

@@ -157,3 +157,25 @@ def test_heater_monitor_on_a_simulated_hot_end(uut, fault):
     assert detected[1] & expected, f"{fault}: alarm {detected[1]:#x}"
     assert detected[0] <= l + 5.0, f"{fault}: detected after {detected[0]:.1f} s"
     assert uut.get("fbUut.fY") == 0.0
+
+
+@pytest.mark.parametrize("dead_time", [10.6, 3.0, 0.7, 25.0])
+def test_heater_monitor_history_delays_the_output_by_the_model_dead_time(uut, dead_time):
+    """The monitor compares X with the output one dead time ago: its history bins are whole task cycles,
+    so the delay it applies is L within one bin (L / 44 rounded up to cycles) and the cycle the output
+    reaches it in."""
+    for name, value in (("fKs", 0.59), ("fTg", 23.4), ("fTu", dead_time)):
+        uut.set(f"sPar.{name}", value)
+    uut.set("nMode", 4)  # MANUAL: the output is the manual value
+    uut.set("fbUut.fYManual", 0.0)
+    scan(uut, 4, 160.0, n=round((dead_time + 5.0) / TS))
+    uut.set("fbUut.fYManual", 50.0)
+    seen = None
+    for n in range(round(2.0 * dead_time / TS) + 20):
+        scan(uut, 4, 160.0)
+        if seen is None and uut.get("fbUut.fbMonitor.fYDelayed") > 25.0:
+            seen = (n + 1) * TS
+    bin_s = TS * math.ceil(dead_time / (44 * TS))
+    assert seen is not None, "the output step never came out of the history"
+    assert abs(seen - dead_time) <= bin_s + 2 * TS, \
+        f"delay {seen:.1f} s for L = {dead_time} s (bin {bin_s:.1f} s)"

@@ -1,0 +1,95 @@
+"""The model-based setpoint response through Modbus (scenario seed003_heatup): seed 003's hot end tuned
+with AUTO (AMIGO, Ms <= 1.6 on its own model), then the step 160 -> 200 degC with the heat-up
+(bHeatUpZone1) against the same PID without it. Goals: 2 % settling within 1.05x the bang-hold bound of
+the true plant, overshoot <= 0.5 %; with the plant's time constant 30 % off after tuning, within 1.5x the
+true plant's bound and 2 % overshoot. The hand-over from TUNE (a plant still moving) costs no IAE against
+the PID alone, and no output kick."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+
+from modbus_bridge.plants.response import PlantModel, bang_hold_bound
+from modbus_bridge.scenario import Disturbance, load_scenario, resolve_scenario
+
+from .conftest import run_scenario
+
+SCENARIO = "seed003_heatup"
+MODEL_BASED, PID_ONLY = "model-based PID", "PID (AUTO)"
+W0, W1 = 160.0, 200.0
+NOMINAL_RATIO, NOMINAL_OVERSHOOT_PCT = 1.05, 0.5
+MISMATCH_RATIO, MISMATCH_OVERSHOOT_PCT = 1.5, 2.0
+ROBUST_MS = 1.6
+HORIZON_S = 200.0  # bound search horizon
+
+
+def _bound_s(time_constant_scale: float) -> float:
+    sc = load_scenario(resolve_scenario(SCENARIO))
+    p = sc.plant_params
+    pm = PlantModel("fopdt", dict(gain_c_per_pct=p["gain_c_per_pct"], dead_time_s=p["dead_time_s"],
+                                  time_constant_s=p["time_constant_s"] * time_constant_scale, ambient_c=W0))
+    return bang_hold_bound(pm, W0, W1, sc.dt_s, HORIZON_S).settling_s
+
+
+def _run(harness, time_constant_scale: float = 1.0,
+         variants: tuple[str, ...] = (MODEL_BASED, PID_ONLY)) -> dict:
+    sc = load_scenario(resolve_scenario(SCENARIO))
+    zone = sc.zones[0]
+    if time_constant_scale != 1.0:  # the plant changes once tuned, before the hand-over to ACTIVE
+        phases = list(zone.phases)
+        ret = phases[1]
+        mismatch = Disturbance("model_mismatch", 0.0, time_constant_scale)
+        phases[1] = dataclasses.replace(ret, disturbances=[*ret.disturbances, mismatch])
+        zone = dataclasses.replace(zone, phases=phases)
+    sc = dataclasses.replace(sc, zones=[zone], variants=[v for v in sc.variants if v.name in variants])
+    out = {}
+    for result, metrics in run_scenario(harness, sc):
+        assert result.error is None, result.error
+        out[result.variant.name] = {m.phase: m for m in metrics}
+    return out
+
+
+@pytest.fixture(scope="module")
+def nominal(harness) -> dict:
+    return _run(harness)
+
+
+def test_auto_tunes_a_robust_feedback_part(nominal):
+    tune = nominal[MODEL_BASED]["tune"]
+    assert tune.outcome == "ok", tune.outcome
+    assert 0.0 < tune.values["tuned_ms"] <= ROBUST_MS, f"Ms {tune.values['tuned_ms']:.2f} of the tuned set"
+
+
+def test_the_step_settles_at_the_bound_without_overshoot(nominal):
+    step = nominal[MODEL_BASED]["step"].values
+    alone = nominal[PID_ONLY]["step"].values
+    bound = _bound_s(1.0)
+    print(f"{SCENARIO}: bound {bound:.1f} s; model-based {step['settling_time_2pct_s']:.1f} s, "
+          f"{step['overshoot_pct']:.2f} %; PID alone {alone['settling_time_2pct_s']} s, "
+          f"{alone['overshoot_pct']:.2f} %")
+    assert step["settling_time_2pct_s"] <= NOMINAL_RATIO * bound
+    assert step["overshoot_pct"] <= NOMINAL_OVERSHOOT_PCT
+    assert step["iae_c_s"] < alone["iae_c_s"]
+
+
+def test_the_hand_over_from_tune_costs_nothing(nominal):
+    """TUNE ends with the plant still rising: the response takes it at the output that would hold it."""
+    ret = nominal[MODEL_BASED]["return"].values
+    alone = nominal[PID_ONLY]["return"].values
+    assert ret["overshoot_pct"] <= NOMINAL_OVERSHOOT_PCT
+    assert ret["iae_c_s"] <= alone["iae_c_s"], f"IAE {ret['iae_c_s']:.0f} vs the PID's {alone['iae_c_s']:.0f}"
+    # no output kick on the way down (total variation of the output, %)
+    assert ret["tv_output_pct"] <= alone["tv_output_pct"], \
+        f"output variation {ret['tv_output_pct']:.0f} % vs the PID's {alone['tv_output_pct']:.0f} %"
+
+
+@pytest.mark.parametrize("scale", [0.7, 1.3])
+def test_a_plant_off_its_model_stays_within_the_goals(harness, scale):
+    step = _run(harness, scale, (MODEL_BASED,))[MODEL_BASED]["step"].values
+    bound = _bound_s(scale)
+    print(f"T x{scale}: bound {bound:.1f} s; model-based {step['settling_time_2pct_s']:.1f} s, "
+          f"{step['overshoot_pct']:.2f} %")
+    assert step["overshoot_pct"] <= MISMATCH_OVERSHOOT_PCT
+    assert step["settling_time_2pct_s"] <= MISMATCH_RATIO * bound

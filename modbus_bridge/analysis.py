@@ -4,10 +4,13 @@ Per phase:
 - a setpoint step at the phase start (not a ramp): step metrics from the phase start, y0 = process value
   at the start, y_final = the new setpoint;
 - a TUNE phase: tuning_duration_s (until the controller reports TUNED), the identified plant
-  (ks, tu, tg) and the PV excursion during tuning;
+  (ks, tu, tg), the sensor noise measured at rest, the tuned gains, the actual-value filter sized from
+  that noise, the set's Ms, and the PV excursion during tuning;
 - a load/ambient/fan/filament disturbance: max deviation and recovery into the 2 % band of the last
   setpoint step (so "back inside the 2 % band" means the same band as the step's settling);
 - a ramp: tracking error (IAE, max |e|) over the phase;
+- a phase the fuzzy adapter ran in, with its Ms bound in use: the worst Ms over the gain sets it can reach,
+  the bound, the scale of the base gains and the share of the ratio box kept (as at the phase end);
 - always: output total variation, saturation time, PWM switches per minute (PWM runs).
 """
 
@@ -42,6 +45,14 @@ TUNE_KEYS = {
     "tv_cool": "tuned_tv_cool_s",
     "t_filter": "tuned_filter_s",
     "ms": "tuned_ms",
+    "noise_pp": "identified_noise_pp_c",
+}
+# the fuzzy adapter's Ms bound at the end of a phase it ran in (fz_ms_reachable 0: no bound in use, left out)
+ADAPTER_KEYS = {
+    "fz_ms_reachable": "fuzzy_ms_reachable",
+    "fz_ms_max": "fuzzy_ms_max",
+    "fz_gain_scale": "fuzzy_gain_scale",
+    "fz_box_share": "fuzzy_box_share",
 }
 
 
@@ -146,6 +157,8 @@ def zone_metrics(result: RunResult, tr: ZoneTrace) -> list[PhaseMetrics]:
             else u
         )
         pm.values.update(effort_metrics(t, y_cmd, plant.u_min_pct, plant.u_max_pct, pwm))
+        if rec.adapter.get("fz_ms_reachable", 0.0) > 0.0:
+            pm.values.update({ADAPTER_KEYS[k]: v for k, v in rec.adapter.items()})
         out.append(pm)
     return out
 

@@ -57,6 +57,14 @@ ROLE_PATTERNS: dict[str, tuple[str, ...]] = {
     "tg": (r"fTgZone{n}",),
     "t_filter": (r"fTFilterTunedZone{n}",),
     "ms": (r"fMsTunedZone{n}",),
+    # sensor noise peak-to-peak TUNE measured at rest (it sizes t_filter from it)
+    "noise_pp": (r"fTuneNoisePpZone{n}",),
+    # the fuzzy adapter's Ms bound: the limit, the worst Ms over the gain sets it can reach, the scale of
+    # the base gains and the share of the configured ratio box it kept for that
+    "fz_ms_max": (r"fFuzzyMsMaxZone{n}",),
+    "fz_ms_reachable": (r"fFuzzyMsReachableZone{n}",),
+    "fz_gain_scale": (r"fFuzzyGainScaleZone{n}",),
+    "fz_box_share": (r"fFuzzyBoxShareZone{n}",),
     "kp_eff": (r"fFuzzyKpZone{n}", r"fKpEffZone{n}", r"fKpEffectiveZone{n}"),
     "tn_eff": (r"fFuzzyTnZone{n}", r"fTnEffZone{n}", r"fTnEffectiveZone{n}"),
     "tv_eff": (r"fFuzzyTvZone{n}", r"fTvEffZone{n}", r"fTvEffectiveZone{n}"),

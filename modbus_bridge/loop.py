@@ -40,8 +40,11 @@ GAIN_ROLES = (
     "tu",
     "tg",
 )
-# read with the gains but kept only as tuning results (no trace): the filter TUNE sized and its set's Ms
-TUNED_ONLY_ROLES = ("t_filter", "ms")
+# read with the gains but kept only as tuning results (no trace): the filter TUNE sized, its set's Ms and
+# the sensor noise it measured at rest
+TUNED_ONLY_ROLES = ("t_filter", "ms", "noise_pp")
+# the fuzzy adapter's Ms bound, kept per phase while the adapter is on (the coil read with them)
+ADAPTER_ROLES = ("fz_ms_reachable", "fz_ms_max", "fz_gain_scale", "fz_box_share")
 TUNED_ROLES = ("kp", "tn", "tv", "kp_cool", "tn_cool", "tv_cool", "ks", "tu", "tg", *TUNED_ONLY_ROLES)
 PROGRESS_EVERY = 50  # plant steps between progress reports
 # plant steps between reads of gains, identified plant, state and error id (1 s at dt = 0.1 s); the state
@@ -65,6 +68,7 @@ class PhaseRecord:
     disturbances: list[tuple[float, str, float | str | None]] = field(default_factory=list)
     outcome: str = "ok"
     tuned: dict[str, float] = field(default_factory=dict)
+    adapter: dict[str, float] = field(default_factory=dict)  # ADAPTER_ROLES, last read with the adapter on
 
 
 @dataclass
@@ -308,6 +312,8 @@ class _ReadPlan:
             if scenario.output_path == "pwm":
                 every += [b["pwm_heat"]] + ([b["pwm_cool"]] if b.has("pwm_cool") else [])
             slow += [b[r] for r in (*GAIN_ROLES, *TUNED_ONLY_ROLES) if b.has(r)]
+            if b.has("fuzzy") and b.has("fz_ms_reachable"):
+                slow += [b["fuzzy"]] + [b[r] for r in ADAPTER_ROLES if b.has(r)]
         return _ReadPlan(every, status, slow, [n for n in every if client.regmap[n].is_bit])
 
 
@@ -464,6 +470,10 @@ class _LoopCloser:
                 for role in TUNED_ROLES:
                     if b.has(role):
                         tr.phases[-1].tuned[role] = float(self.slow_values[b[role]])
+                if b.has("fuzzy") and b.has("fz_ms_reachable") and self.slow_values[b["fuzzy"]]:
+                    tr.phases[-1].adapter = {
+                        r: float(self.slow_values[b[r]]) for r in ADAPTER_ROLES if b.has(r)
+                    }
 
     def planned_total(self, t: float, horizon: float) -> float:
         """The plant time the run needs as planned at time t (the progress total)."""

@@ -2,8 +2,9 @@
 
 Order: title; PARTIAL REPORT banner when the run did not complete; the verdict table (each judged metric
 vs the paper and vs the goal, pass/fail); the variants overlaid on one axis; how it was made (command,
-tool version, date, plant parameters, sensor, tuned gains per variant); all metrics side by side; one
-plot per variant. Both files are rendered from the same blocks.
+tool version, date, plant parameters, sensor, identified plant, measured noise, tuned gains and filter per
+variant, the fuzzy adapter's Ms bound); all metrics side by side; one plot per variant. Both files are
+rendered from the same blocks.
 """
 
 from __future__ import annotations
@@ -24,6 +25,16 @@ TUNED_KEYS = (  # metric key -> label with unit
     ("tuned_kp_pct_per_c", "Kp (%/°C)"),
     ("tuned_tn_s", "Tn (s)"),
     ("tuned_tv_s", "Tv (s)"),
+    ("identified_noise_pp_c", "noise p-p (°C)"),
+    ("tuned_filter_s", "filter (s)"),
+    ("tuned_ms", "Ms"),
+)
+# the fuzzy adapter's Ms bound per variant and phase (analysis.ADAPTER_KEYS) -> label
+ADAPTER_COLUMNS = (
+    ("fuzzy_ms_reachable", "Ms worst reachable"),
+    ("fuzzy_ms_max", "Ms bound"),
+    ("fuzzy_gain_scale", "base gains ×"),
+    ("fuzzy_box_share", "ratio box kept"),
 )
 
 
@@ -52,6 +63,21 @@ def _tuned_table(runs: list[tuple[RunResult, list[PhaseMetrics]]]) -> Block | No
             if pm.kind == "tune":
                 cells = [f"{pm.values[k]:.4g}" if k in pm.values else "–" for k, _ in TUNED_KEYS]
                 rows.append([result.variant.name, pm.zone, pm.phase, *cells])
+    return Block("table", header=header, rows=rows) if rows else None
+
+
+def _adapter_table(runs: list[tuple[RunResult, list[PhaseMetrics]]]) -> Block | None:
+    """The fuzzy adapter's Ms bound in the phases it ran in (none: no fuzzy variant, or no bound in use)."""
+    header = ["variant", "zone", "phase", *[label for _, label in ADAPTER_COLUMNS]]
+    rows = []
+    for result, pms in runs:
+        for pm in pms:
+            if "fuzzy_ms_reachable" in pm.values:
+                v = pm.values
+                rows.append([result.variant.name, pm.zone, pm.phase, f"{v['fuzzy_ms_reachable']:.4g}",
+                             f"{v['fuzzy_ms_max']:.3g}" if "fuzzy_ms_max" in v else "–",
+                             f"{v['fuzzy_gain_scale']:.3g}" if "fuzzy_gain_scale" in v else "–",
+                             f"{100.0 * v['fuzzy_box_share']:.0f} %" if "fuzzy_box_share" in v else "–"])
     return Block("table", header=header, rows=rows) if rows else None
 
 
@@ -101,6 +127,13 @@ def summary_blocks(runs: list[tuple[RunResult, list[PhaseMetrics]]], metrics_hea
     tuned = _tuned_table(runs)
     if tuned is not None:
         blocks += [Block("h2", "Identified plant and tuned gains"), tuned]
+    adapter = _adapter_table(runs)
+    if adapter is not None:
+        blocks += [Block("h2", "Fuzzy adapter: Ms over the gain sets it can reach"),
+                   Block("p", "Worst maximum sensitivity over every gain set the adapter can reach, on the "
+                              "identified model with the filter in use (fFuzzyMsReachable), kept at or below "
+                              "the bound by scaling the base gains and narrowing the ratio box."),
+                   adapter]
     blocks += [Block("h2", "All metrics"), Block("table", header=metrics_header, rows=metrics_rows)]
     for name, png in plots.items():
         blocks += [Block("h2", f"Trace: {name}"), Block("img", png)]

@@ -92,3 +92,38 @@ def test_partial_report_says_so(tmp_path, runs):
     md = written["summary_md"].read_text(encoding="utf-8").splitlines()
     assert md[2].startswith("> **PARTIAL REPORT**") and "interrupted by SIGINT" in md[2]
     assert json.loads(written["metrics"].read_text(encoding="utf-8"))["complete"] is False
+
+
+def test_report_shows_the_measured_noise_the_tuned_filter_and_the_fuzzy_bound(tmp_path):
+    """Seed 003 on the application (the default run docs/fuzzy.md's figures come from): what TUNE measured
+    and sized, and the fuzzy adapter's Ms bound, read over Modbus, reach metrics.json and summary.md."""
+    from modbus_bridge import docfigures
+
+    runs = docfigures.default_run()
+    by_name = {r.variant.name: {pm.phase: pm for pm in pms} for r, pms in runs}
+    tune = by_name["fuzzy PID"]["tune"].values
+    assert 0.0 < tune["identified_noise_pp_c"] < 1.0  # 12-bit NTC at 200 degC: about one count, 0.12 degC
+    assert tune["tuned_filter_s"] >= 0.0 and tune["tuned_ms"] > 1.0
+    for phase in ("step", "load"):  # the adapter runs; its bound holds at the cost of scale and box
+        v = by_name["fuzzy PID"][phase].values
+        assert 1.0 < v["fuzzy_ms_reachable"] <= v["fuzzy_ms_max"] * (1 + 1e-3)
+        assert 0.0 < v["fuzzy_gain_scale"] < 1.0 and 0.0 < v["fuzzy_box_share"] <= 1.0
+    assert not any(k.startswith("fuzzy_") for pm in by_name["PID (self-tuned)"].values() for k in pm.values)
+
+    written = write_reports(runs, tmp_path)
+    doc = json.loads(written["metrics"].read_text(encoding="utf-8"))
+    fuzzy_phases = {p["phase"]: p["metrics"] for p in doc["variants"][0]["phases"]}
+    assert fuzzy_phases["tune"]["identified_noise_pp_c"] == pytest.approx(tune["identified_noise_pp_c"])
+    step = by_name["fuzzy PID"]["step"].values
+    assert fuzzy_phases["step"]["fuzzy_ms_reachable"] == pytest.approx(step["fuzzy_ms_reachable"])
+    md = written["summary_md"].read_text(encoding="utf-8")
+    tuned_header = next(line for line in md.splitlines() if line.startswith("| variant | zone | phase | Ks"))
+    assert "noise p-p (°C)" in tuned_header and "filter (s)" in tuned_header and "| Ms |" in tuned_header
+    assert f"| {tune['identified_noise_pp_c']:.4g} | {tune['tuned_filter_s']:.4g} |" in md
+    section = md[md.index("## Fuzzy adapter: Ms over the gain sets it can reach"):md.index("## All metrics")]
+    assert (f"| fuzzy PID | nozzle | step | {step['fuzzy_ms_reachable']:.4g} | {step['fuzzy_ms_max']:.3g} | "
+            f"{step['fuzzy_gain_scale']:.3g} | {100 * step['fuzzy_box_share']:.0f} % |") in section
+    assert "PID (self-tuned)" not in section
+    for key in ("identified_noise_pp_c", "tuned_filter_s", "tuned_ms", "fuzzy_ms_reachable",
+                "fuzzy_gain_scale", "fuzzy_box_share"):
+        assert f"| {key} |" in md  # the side-by-side table of every metric

@@ -102,3 +102,59 @@ def test_committed_docs_block_has_the_report_structure():
         assert any(r.startswith("best fixed PID") for r in rows)
         if "setpoint step" in sec:
             assert "bound (bang-hold, true model)" in rows
+
+
+@pytest.fixture(scope="module")
+def seed003_outcomes():
+    """Every variant of the default scenario (seed 003, stepped; the run docs/fuzzy.md's figures come from),
+    as the scorecard sees them: zone 1 from the scored step, and the Ms of a set on the true model."""
+    pytest.importorskip("plc.runtime.server", reason="the soft-PLC runtime is needed")
+    from modbus_bridge import docfigures
+    from modbus_bridge.optimise.experiment import outcome_of
+    from modbus_bridge.optimise.robustness import loop_model, scored_step
+
+    runs = docfigures.default_run()
+    sc = runs[0][0].scenario
+    scored_from = scored_step(sc)[0]
+    outcomes = {r.variant.name: (r.variant, outcome_of(r.variant.name, r, m, scored_from)) for r, m in runs}
+    return outcomes, loop_model(sc).ms
+
+
+def test_fuzzy_row_shows_the_worst_reachable_ms_not_the_base_sets(seed003_outcomes):
+    from modbus_bridge.scorecard.build import _tuned_gains, variant_row
+    from modbus_bridge.scorecard.report import row_cells
+
+    outcomes, ms_of = seed003_outcomes
+    variant, o = outcomes["fuzzy PID"]
+    bound = next(m.values for m in o.scored_metrics() if "fuzzy_ms_reachable" in m.values)
+    reachable, limit = bound["fuzzy_ms_reachable"], bound["fuzzy_ms_max"]
+    base_ms = ms_of(_tuned_gains(o))
+    assert base_ms > 4.0  # seed 003's Cohen-Coon set: the number the row must not show
+    assert 1.0 < reachable <= limit * (1 + 1e-3) and bound["fuzzy_gain_scale"] < 1.0  # the bound acted
+    row = variant_row(variant, o, ms_of)
+    assert row.ms == pytest.approx(reachable) and abs(row.ms - base_ms) > 1.0
+    cells = row_cells(row)
+    assert cells[5] == f"{reachable:.2f} (worst reachable)"
+    assert "base set" not in row.note and f"bound {limit:.3g}" in row.note
+    assert f"base gains × {bound['fuzzy_gain_scale']:.3g}" in row.note
+    assert "outside the search limits" not in row.note
+    # the fixed PID keeps its own set's Ms, unlabelled
+    pid_variant, pid = outcomes["PID (self-tuned)"]
+    pid_row = variant_row(pid_variant, pid, ms_of)
+    assert pid_row.ms == pytest.approx(base_ms) and row_cells(pid_row)[5] == f"{base_ms:.2f}"
+
+
+def test_fuzzy_row_without_a_bound_says_it_shows_the_base_set(seed003_outcomes):
+    import dataclasses
+
+    from modbus_bridge.scorecard.build import variant_row
+    from modbus_bridge.scorecard.report import row_cells
+
+    outcomes, ms_of = seed003_outcomes
+    variant, o = outcomes["fuzzy PID"]
+    unbounded = [
+        dataclasses.replace(m, values={k: v for k, v in m.values.items() if not k.startswith("fuzzy_")})
+        for m in o.metrics
+    ]
+    row = variant_row(variant, dataclasses.replace(o, metrics=unbounded), ms_of)
+    assert row_cells(row)[5].endswith("(base set)") and "no Ms bound in use" in row.note

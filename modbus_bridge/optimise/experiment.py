@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..analysis import PhaseMetrics
+from ..loop import RunResult
 from ..scenario import Phase, Scenario, Variant
 
 DERIVATIVE_FILTER_RATIO = 0.25  # Td = Tv / 4, as the project's tuner sets it
@@ -139,9 +140,16 @@ def run_experiment(exp: Experiment) -> Outcome:
     setup = _setup()
     runs = asyncio.run(run_variants(exp.scenario, setup, plc=exp.plc))
     result, metrics = runs[0]
+    out = outcome_of(exp.label, result, metrics, exp.scored_from_phase)
+    out.wall_s = time.perf_counter() - t0
+    return out
+
+
+def outcome_of(label: str, result: RunResult, metrics: list[PhaseMetrics], scored_from_phase: int) -> Outcome:
+    """The outcome of a finished run (zone 1's trace)."""
     tr = result.zones[0]
     return Outcome(
-        label=exp.label,
+        label=label,
         metrics=metrics,
         t=np.asarray(tr.t),
         pv=np.asarray(tr.pv),
@@ -149,9 +157,8 @@ def run_experiment(exp: Experiment) -> Outcome:
         setpoint=np.asarray(tr.setpoint),
         u=np.asarray(tr.u),
         phases=[(p.name, p.t_start, p.t_end) for p in tr.phases],
-        scored_from_phase=exp.scored_from_phase,
+        scored_from_phase=scored_from_phase,
         error=result.error,
-        wall_s=time.perf_counter() - t0,
         plant_time_s=result.plant_time_s,
     )
 

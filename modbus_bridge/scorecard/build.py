@@ -4,13 +4,15 @@ phase), against the bang-hold bound and the best fixed PID the optimiser finds.
 Rows: the bound (true model, open loop), best fixed PID (optimise/search.py, IAE with the overshoot and
 Ms limits), SIMC and AMIGO on the true model, and each variant of the scenario as written (the
 project's self-tuned PID, fuzzy PID, ...). Columns: 2 % settling and overshoot of the first scored
-setpoint step, IAE over the scored phases, 2 % recovery after the first load, Ms on the true model, and
-the ratios of settling to the bound and of IAE to the best PID.
+setpoint step, IAE over the scored phases, 2 % recovery after the first load, Ms on the true model (a
+fuzzy row: the worst Ms over the gain sets its adapter can reach, as the PLC reports it), and the ratios
+of settling to the bound and of IAE to the best PID.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -29,7 +31,7 @@ from ..optimise.experiment import (
 from ..optimise.robustness import plant_model, scored_step
 from ..optimise.search import Optimiser, Settings
 from ..plants.response import BangHold, bang_hold_bound
-from ..scenario import Scenario
+from ..scenario import Scenario, Variant
 
 BOUND_HORIZON_FACTOR = 10.0
 
@@ -42,6 +44,7 @@ class Row:
     iae: float = math.nan
     recovery_s: float = math.nan
     ms: float = math.nan
+    ms_what: str = ""  # which Ms when not the set's own (fuzzy rows: "worst reachable")
     gains: PidGains | None = None
     note: str = ""
     outcome: Outcome | None = None
@@ -115,6 +118,45 @@ def _row(name: str, o: Outcome, gains: PidGains | None, ms_of) -> Row:
     return row
 
 
+def adapter_bound(o: Outcome) -> dict[str, float] | None:
+    """The fuzzy adapter's Ms bound as the PLC reported it at the end of the run (the last scored phase the
+    adapter ran in with a bound in use: analysis.ADAPTER_KEYS), None without one."""
+    for m in reversed(o.scored_metrics()):
+        if m.values.get("fuzzy_ms_reachable"):
+            return {k: float(v) for k, v in m.values.items() if k.startswith("fuzzy_") and v is not None}
+    return None
+
+
+def variant_row(v: Variant, o: Outcome, ms_of: Callable[[PidGains], float]) -> Row:
+    """A scenario variant's row. With the fuzzy adapter on, the gains move inside the box the adapter's Ms
+    bound leaves: Ms is the worst over every set it can reach (fFuzzyMsReachable, on the identified model
+    with the filter in use), not the base set's; without a bound in use, the base set's, said so."""
+    row = _row(v.name, o, _tuned_gains(o), ms_of)
+    bound = adapter_bound(o)
+    if bound is not None:
+        row.ms, row.ms_what = bound["fuzzy_ms_reachable"], "worst reachable"
+        what = (
+            f"Ms: worst over the gain sets the adapter can reach, on the identified model (bound "
+            f"{_g(bound.get('fuzzy_ms_max'))}; ratio box {_pct(bound.get('fuzzy_box_share'))} kept, "
+            f"base gains × {_g(bound.get('fuzzy_gain_scale'))})"
+        )
+    elif v.fuzzy:
+        row.ms_what = "base set"
+        what = "Ms of the base set (no Ms bound in use; the fuzzy gains move)"
+    else:
+        return row
+    row.note = f"{row.note}; {what}" if row.note else what
+    return row
+
+
+def _g(v: float | None) -> str:
+    return "–" if v is None else f"{v:.3g}"
+
+
+def _pct(v: float | None) -> str:
+    return "–" if v is None else f"{100.0 * v:.0f} %"
+
+
 def build_card(sc: Scenario, executor: Executor, evals: int) -> Card:
     card = Card(sc)
     why = applicable(sc)
@@ -156,10 +198,7 @@ def build_card(sc: Scenario, executor: Executor, evals: int) -> Card:
         if ev.outcome is not None:
             rows.append(_row(name, ev.outcome, ev.gains, opt.model.ms))
     for v, o in zip(sc.variants, outcomes, strict=True):
-        row = _row(v.name, o, _tuned_gains(o), opt.model.ms)
-        if v.fuzzy:
-            row.note = (row.note + "; " if row.note else "") + "Ms of the base set (fuzzy gains move)"
-        rows.append(row)
+        rows.append(variant_row(v, o, opt.model.ms))
     best_iae = rows[1].iae if best.best.outcome is not None and len(rows) > 1 else math.nan
     if card.bound is None:
         best_iae = rows[0].iae if rows and rows[0].outcome is not None else math.nan

@@ -40,7 +40,7 @@ def row_cells(r: Row) -> list[str]:
         _f(r.overshoot_pct, 2),
         _f(r.iae, 0),
         _f(r.recovery_s),
-        _f(r.ms, 2),
+        _f(r.ms, 2) + (f" ({r.ms_what})" if r.ms_what and math.isfinite(r.ms) else ""),
         _f(r.vs_bound, 2),
         _f(r.vs_best, 2),
         gains,

@@ -15,7 +15,9 @@ from dataclasses import dataclass, field
 from modbus_bridge.binding import ControllerCodes, ZoneBinding, resolve_zone
 from modbus_bridge.regmap import RegisterMap, Tag
 
-# extra roles the panel shows beyond the harness' (same naming convention, "{n}" = zone number)
+# extra roles the panel shows beyond the harness' (same naming convention, "{n}" = zone number); the
+# harness' own (modbus_bridge.binding) include the tuning results noise_pp, t_filter (the filter TUNE sized)
+# and ms, and the fuzzy adapter's Ms bound fz_ms_max, fz_ms_reachable, fz_gain_scale, fz_box_share
 PANEL_ROLES: dict[str, str] = {
     "setpoint2": "fSetpointStandbyZone{n}",
     "sel_setpoint": "bSelSetpointZone{n}",
@@ -26,6 +28,7 @@ PANEL_ROLES: dict[str, str] = {
     "tune_rule_used": "nTuneRuleUsedZone{n}",
     "fit_rms": "fTuneFitRmsZone{n}",
     "ms_tuned": "fMsTunedZone{n}",
+    "t_filter_used": "fTFilterUsedZone{n}",
     "w_min": "fWMinZone{n}",
     "w_max": "fWMaxZone{n}",
     "y_min": "fYMinZone{n}",
@@ -50,6 +53,8 @@ PANEL_ROLES: dict[str, str] = {
     "fz_status": "nFuzzyStatusZone{n}",
     "fz_error": "nFuzzyErrorIdZone{n}",
     "fz_preset": "nFuzzyPresetZone{n}",
+    "fz_symmetric": "bFuzzySymmetricZone{n}",
+    "fz_sign_band": "fFuzzySignBandZone{n}",
     "tau_norm": "fTauNormZone{n}",
 }
 FUZZY_RULES = 4  # fFuzzyRule<k>StrengthZone<n> / nFuzzyRule<k>Zone<n>, k = 1..FUZZY_RULES
@@ -182,6 +187,15 @@ class PanelModel:
         names = [z[r] for z in self.zones for r in roles if z.has(r)]
         names += [n for z in self.zones for pair in z.rules for n in pair]
         return list(dict.fromkeys(names))
+
+    def parameter_groups(self, zone: int) -> dict[str, list[str]]:
+        """{group: parameter names} of the parameter page: every register of the zone a client sets (coils
+        too), in register order; without metadata, no rows guessed to be status."""
+        groups: dict[str, list[str]] = {}
+        for name, meta in self.meta.items():
+            if meta.zone == zone and meta.owner == "client" and (meta.from_source or meta.group != "status"):
+                groups.setdefault(meta.group or "other", []).append(name)
+        return groups
 
     def slow_tags(self) -> list[str]:
         """Read about once a second: every other register (parameters, identified plant, diagnostics)."""

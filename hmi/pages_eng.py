@@ -7,6 +7,7 @@ import time
 from dataclasses import dataclass, field
 
 from nicegui import ui
+from nicegui.events import ValueChangeEventArguments
 
 from .auth import ENGINEER, OPERATOR
 from .layout import frame, number_or_error, panel, value_text
@@ -80,18 +81,20 @@ def params_page(zone: int = 1) -> None:
     z = _zone_select(zone, "/params")
     ui.label("Writable by the engineer level. The page refuses entries outside the range; the PLC checks "
              "them again and a value it does not take is shown with its reason.").classes("text-caption")
-    groups: dict[str, list[str]] = {}
-    for name, meta in p.model.meta.items():
-        if meta.zone == z.number and meta.owner == "client" and not p.model.regmap[name].is_bit and (
-                meta.from_source or meta.group != "status"):  # without metadata: no guessed status rows
-            groups.setdefault(meta.group or "other", []).append(name)
+    groups = p.model.parameter_groups(z.number)
     order = [g for g in GROUP_ORDER if g in groups] + sorted(g for g in groups if g not in GROUP_ORDER)
     rows: list[tuple[str, ui.label]] = []
+    switches: list[tuple[str, ui.switch]] = []
+    writing: set[str] = set()  # coils whose write is in flight: their switch keeps the entry until it ends
     built: set[str] = set()
 
     def refresh() -> None:
         for name, lab in rows:
             lab.set_text(value_text(name))
+        for name, sw in switches:
+            v = p.value(name)
+            if name not in writing and v is not None and bool(v) != sw.value:
+                sw.set_value(bool(v))
 
     def build(g: str, exp: ui.expansion) -> None:
         """A group's rows are made when it is first opened (a page of every parameter is slow)."""
@@ -100,7 +103,10 @@ def params_page(zone: int = 1) -> None:
         built.add(g)
         with exp:
             for name in groups[g]:
-                rows.append((name, _param_row(name)))
+                if p.model.regmap[name].is_bit:
+                    switches.append((name, _switch_row(name, writing)))
+                else:
+                    rows.append((name, _param_row(name)))
         refresh()
 
     for g in order:
@@ -148,6 +154,39 @@ def _param_row(name: str) -> ui.label:
 
         ui.button("Write", on_click=send).props(f'dense data-testid="write-{name}"')
     return current
+
+
+def _switch_row(name: str, writing: set[str]) -> ui.switch:
+    """A coil parameter: a switch showing the value in use; a change is written at once (engineer level, the
+    name in `writing` meanwhile) and a write the PLC does not take puts the switch back with the reason."""
+    p = panel()
+    tag = p.model.regmap[name]
+    with ui.row().classes("items-center w-full no-wrap"):
+        with ui.column().classes("w-72 gap-0"):
+            ui.label(name).classes("text-weight-medium")
+            ui.label(tag.comment).classes("text-caption text-grey-7")
+        current = p.value(name)
+        sw = ui.switch(value=bool(current) if current is not None else False).props(
+            f'data-testid="sw-{name}"')
+        msg = ui.label().classes("text-negative text-caption").props(f'data-testid="msg-{name}"')
+
+    async def send(e: ValueChangeEventArguments) -> None:
+        on, shown = bool(e.value), p.value(name)
+        if shown is None or bool(shown) == on:  # the page following the PLC, not an entry
+            return
+        msg.set_text("")
+        writing.add(name)
+        try:
+            result = await p.write({name: on}, ENGINEER, f"{name} {'on' if on else 'off'}")
+        finally:
+            writing.discard(name)
+        if result is None or not result.ok:
+            if result is not None:
+                msg.set_text(result.message)
+            sw.set_value(bool(p.value(name)))
+
+    sw.on_value_change(send)
+    return sw
 
 
 @dataclass
@@ -251,6 +290,7 @@ def tuning_page(zone: int = 1) -> None:
             quality += f"; fit rms {value_text(z['fit_rms'])} of the rise"
         if z.has("ms_tuned") and p.value(z["ms_tuned"]):
             quality += f"; Ms of the set {value_text(z['ms_tuned'])} (robust <= 1.6)"
+        quality += _noise_and_filter(z)
         ident.set_text(f"identified: K = {value_text(z['ks']) if z.has('ks') else '-'}, "
                        f"T = {value_text(z['tg']) if z.has('tg') else '-'}, "
                        f"L = {value_text(z['tu']) if z.has('tu') else '-'}; rule used: {rule_text}{quality}")
@@ -262,6 +302,20 @@ def tuning_page(zone: int = 1) -> None:
 
     refresh()
     ui.timer(0.5, refresh)
+
+
+def _noise_and_filter(z: ZoneModel) -> str:
+    """The sensor noise TUNE measured at rest and the actual-value filter it sized from it / the one in use
+    ("" before a tuning has measured the noise)."""
+    p = panel()
+    if not (z.has("noise_pp") and p.value(z["noise_pp"])):
+        return ""
+    text = f"; sensor noise {value_text(z['noise_pp'])} peak-to-peak at rest"
+    if z.has("t_filter"):
+        text += f", filter sized {value_text(z['t_filter'])}"
+    if z.has("t_filter_used"):
+        text += f", in use {value_text(z['t_filter_used'])}"
+    return text
 
 
 def _tuned(z: ZoneModel) -> bool:

@@ -9,12 +9,13 @@ from nicegui import ui
 
 from .fuzzy_tables import OUTPUTS, preset_names, preset_tables
 from .layout import frame, panel, value_text
-from .model import fmt
+from .model import ZoneModel, fmt
 from .pages_eng import _when, _zone_select
 from .pages_live import TREND_COLUMNS, LiveFeed
 
 SETS = ("NB", "NM", "NS", "ZO", "PS", "PM", "PB")
 RULE_CODE_BASE = 10  # rule code = 10 * E set + EC set (register comment of nFuzzyRule<k>)
+MS_TOLERANCE = 1e-3  # the PLC's bisection may leave the worst Ms this far above its bound
 STATUS_GROUPS = ("status", "safety")  # shown on the diagnostics page, whatever registers they hold
 
 
@@ -36,6 +37,8 @@ def fuzzy_page(zone: int = 1) -> None:
                         ui.label(text).classes("w-32 text-grey-8")
                         labels[role] = ui.label().classes("text-subtitle1").props(f'data-testid="fz-{role}"')
             explain = ui.label().classes("w-96 text-body2").props('data-testid="fz-explain"')
+            robust = ui.label().classes("w-96 text-body2").props('data-testid="fz-robust"')
+            symmetric = ui.label().classes("w-96 text-body2").props('data-testid="fz-symmetric"')
         with ui.column():
             if z.has("fuzzy"):
                 sw = ui.switch("fuzzy adapter on (engineer)", value=bool(p.value(z["fuzzy"]))).props(
@@ -99,9 +102,51 @@ def fuzzy_page(zone: int = 1) -> None:
                 f"{value_text(z['kp_eff']) if z.has('kp_eff') else '-'}.")
         else:
             explain.set_text("No rule fires (adapter off or not running): the base gains are in use.")
+        robust.set_text(_robustness_text(z))
+        symmetric.set_text(_symmetric_text(z))
         _push_with_base(feed)
 
     ui.timer(0.2, refresh)
+
+
+def _robustness_text(z: ZoneModel) -> str:
+    """The adapter's Ms bound: worst Ms over every gain set it can reach vs the bound, and what keeping it
+    cost (share of the ratio box kept, scale of the base gains)."""
+    p = panel()
+    if not z.has("fz_ms_reachable"):
+        return ""
+    reachable = p.value(z["fz_ms_reachable"])
+    bound = p.value(z["fz_ms_max"]) if z.has("fz_ms_max") else None
+    if reachable is None:
+        return "Ms over reachable sets: not read yet"
+    if not reachable:
+        why = "Ms bound off (fFuzzyMsMax <= 1)" if bound is not None and bound <= 1.0 else \
+            "no identified model or no valid base set yet"
+        return f"Ms over reachable sets not bounded: {why}; the configured ratio box is used."
+    text = f"Ms over reachable sets {value_text(z['fz_ms_reachable'], decimals=3)}"
+    if bound is not None:
+        holds = float(reachable) <= float(bound) * (1.0 + MS_TOLERANCE)
+        text += f" {'≤' if holds else '>'} {value_text(z['fz_ms_max'])}"
+    cost = []
+    share = p.value(z["fz_box_share"]) if z.has("fz_box_share") else None
+    if share is not None:
+        cost.append(f"box {100.0 * float(share):.0f} %")
+    if z.has("fz_gain_scale"):
+        cost.append(f"gains × {value_text(z['fz_gain_scale'])}")
+    return text + (f" ({', '.join(cost)})" if cost else "")
+
+
+def _symmetric_text(z: ZoneModel) -> str:
+    p = panel()
+    if not z.has("fz_symmetric"):
+        return ""
+    on = p.value(z["fz_symmetric"])
+    if on is None:
+        return ""
+    if not on:
+        return "Rule table read as printed (symmetric use off): an approach from above differs from below."
+    band = f", sign of e kept inside ±{value_text(z['fz_sign_band'])}" if z.has("fz_sign_band") else ""
+    return f"Symmetric table use on (E and EC times the sign of e){band}."
 
 
 async def _fuzzy_switch(z, sw: ui.switch, on: bool) -> None:

@@ -83,6 +83,26 @@ def test_model_finds_both_zones_and_reads_in_few_blocks() -> None:
     assert len(spans) <= 8, [(s.table, s.start, s.count) for s in spans]
 
 
+def test_tuning_and_fuzzy_robustness_registers_reach_the_panel() -> None:
+    """The registers TUNE's noise-sized filter and the fuzzy adapter's Ms bound added: roles for the pages
+    that show them, and the parameters among the page's groups (a coil included), in every zone."""
+    model = load_model(load_register_map())
+    roles = ("noise_pp", "t_filter", "t_filter_used", "fz_ms_reachable", "fz_ms_max", "fz_gain_scale",
+             "fz_box_share", "fz_symmetric", "fz_sign_band")
+    for z in model.zones:
+        n = z.number
+        assert all(z.has(r) for r in roles), [r for r in roles if not z.has(r)]
+        assert (z["noise_pp"], z["t_filter"], z["fz_ms_reachable"]) == (
+            f"fTuneNoisePpZone{n}", f"fTFilterTunedZone{n}", f"fFuzzyMsReachableZone{n}")
+        groups = model.parameter_groups(n)
+        fuzzy = {f"fFuzzyMsMaxZone{n}", f"fFuzzySignBandZone{n}", f"bFuzzySymmetricZone{n}"}
+        assert fuzzy <= set(groups["fuzzy"])
+        assert f"fTuneFilterLagShareZone{n}" in groups["tuning"]
+        shown = {name for names in groups.values() for name in names}
+        # results the PLC writes are shown on their pages, not offered as parameters
+        assert not {f"fFuzzyMsReachableZone{n}", f"fTFilterUsedZone{n}", f"fTuneNoisePpZone{n}"} & shown
+
+
 def test_poller_reads_writes_and_audits_against_the_soft_plc(tmp_path) -> None:
     from hmi.poller import Poller
     from plc.bundle import bundle_text

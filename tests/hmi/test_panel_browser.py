@@ -18,6 +18,7 @@ from .conftest import ENGINEER_PASSWORD, Stack, shot
 
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
 TUNE_TIMEOUT_S = 120.0  # 20 x real time; generous for a machine shared by many test runs
+WRITE_TIMEOUT_MS = 15000  # a panel write and its read-back on that machine
 SENSOR_BITS = 1 << 0 | 1 << 6  # sensor open / sensor short (docs/library.md alarm table)
 
 
@@ -54,6 +55,16 @@ def wait_for(predicate, timeout: float, what: str, step: float = 0.2):
             return last
         time.sleep(step)
     raise AssertionError(f"timed out after {timeout} s waiting for {what} (last: {last!r})")
+
+
+def shown(name: str, value: float, decimals: int | None = None) -> str:
+    """A register's value as the panel writes it (its metadata's decimals and unit)."""
+    from hmi.model import fmt, meta_of
+    from modbus_bridge.regmap import load_register_map
+
+    meta = meta_of(load_register_map()[name])
+    text = fmt(float(value), meta.decimals if decimals is None else decimals)
+    return f"{text} {meta.unit}" if meta.unit else text
 
 
 def number(text: str) -> float:
@@ -157,6 +168,31 @@ def test_plc_refusal_is_shown(stack: Stack, pg) -> None:
     shot(pg, "parameters", docs=True)
 
 
+def test_new_parameters_show_in_their_groups_and_a_coil_switches(stack: Stack, pg) -> None:
+    """The fuzzy adapter's Ms bound, sign band and symmetric table use, and TUNE's filter lag share: in the
+    groups of their metadata with the value in use; the coil is a switch that reaches the PLC."""
+    pg.goto(stack.url + "/params?zone=1")
+    login(pg, stack, "engineer", ENGINEER_PASSWORD)
+    got = stack.read("fFuzzyMsMaxZone1", "fFuzzySignBandZone1", "bFuzzySymmetricZone1",
+                     "fTuneFilterLagShareZone1")
+    pg.get_by_test_id("group-fuzzy").click()
+    for name in ("fFuzzyMsMaxZone1", "fFuzzySignBandZone1"):
+        expect()(pg.get_by_test_id(f"val-{name}")).to_have_text(shown(name, got[name]))
+    switch = pg.get_by_test_id("sw-bFuzzySymmetricZone1")
+    symmetric = bool(got["bFuzzySymmetricZone1"])
+    expect()(switch).to_have_attribute("aria-checked", str(symmetric).lower())
+    for want in (not symmetric, symmetric):  # switch over and back
+        switch.click()
+        note = f"bFuzzySymmetricZone1 {'on' if want else 'off'}: accepted by the PLC"
+        # written, read back after a PLC scan, then notified; slow when the machine is busy
+        expect()(pg.get_by_text(note)).to_be_visible(timeout=WRITE_TIMEOUT_MS)
+        assert stack.read("bFuzzySymmetricZone1")["bFuzzySymmetricZone1"] == want
+        expect()(switch).to_have_attribute("aria-checked", str(want).lower())
+    pg.get_by_test_id("group-tuning").click()
+    expect()(pg.get_by_test_id("val-fTuneFilterLagShareZone1")).to_have_text(
+        shown("fTuneFilterLagShareZone1", got["fTuneFilterLagShareZone1"]))
+
+
 GAINS = ("fKpZone1", "fTnZone1", "fTvZone1", "fTdZone1")
 
 
@@ -190,6 +226,13 @@ def test_tuning_reject_restores_and_accept_keeps(stack: Stack, pg) -> None:
     expect()(ident).not_to_contain_text(re.compile(r"K = 0 degC"))  # seed 003: K 0.59 degC/%
     assert "rule used: AUTO" not in ident.inner_text()  # the rule AUTO picked
     expect()(ident).to_contain_text(re.compile(r"fit rms \S+ % of the rise; Ms of the set \d"))
+    # what TUNE measured at rest and the filter it sized from it, as the PLC reports them
+    got = stack.read("fTuneNoisePpZone1", "fTFilterTunedZone1", "fTFilterUsedZone1")
+    assert got["fTuneNoisePpZone1"] > 0.0
+    expect()(ident).to_contain_text(
+        f"; sensor noise {shown('fTuneNoisePpZone1', got['fTuneNoisePpZone1'])} peak-to-peak at rest, filter "
+        f"sized {shown('fTFilterTunedZone1', got['fTFilterTunedZone1'])}, in use "
+        f"{shown('fTFilterUsedZone1', got['fTFilterUsedZone1'])}")
     shot(pg, "tuning", docs=True)
     pg.get_by_test_id("tune-reject").click()
     expect()(pg.get_by_test_id("tune-decided")).to_contain_text("rejected")
@@ -262,6 +305,19 @@ def test_fuzzy_and_diagnostics_pages(stack: Stack, pg) -> None:
     wait_for(lambda: stack.read("bFuzzyZone1")["bFuzzyZone1"], 10, "the fuzzy adapter coil to be on")
     expect()(pg.get_by_test_id("fz-table-note")).to_contain_text("Rule table of preset")
     expect()(pg.get_by_test_id("fz-explain")).to_contain_text("rule")
+    # the adapter's Ms bound on the accepted tuned set, as read over Modbus
+    got = stack.read("fFuzzyMsReachableZone1", "fFuzzyMsMaxZone1", "fFuzzyBoxShareZone1",
+                     "fFuzzyGainScaleZone1", "bFuzzySymmetricZone1", "fFuzzySignBandZone1")
+    reachable, bound = got["fFuzzyMsReachableZone1"], got["fFuzzyMsMaxZone1"]
+    assert 1.0 < reachable <= bound * (1 + 1e-3)
+    expect()(pg.get_by_test_id("fz-robust")).to_have_text(
+        f"Ms over reachable sets {shown('fFuzzyMsReachableZone1', reachable, 3)} ≤ "
+        f"{shown('fFuzzyMsMaxZone1', bound)} (box {100 * got['fFuzzyBoxShareZone1']:.0f} %, gains × "
+        f"{shown('fFuzzyGainScaleZone1', got['fFuzzyGainScaleZone1'])})")
+    assert got["bFuzzySymmetricZone1"]  # the application's default, restored by the parameter test
+    expect()(pg.get_by_test_id("fz-symmetric")).to_contain_text(
+        f"Symmetric table use on (E and EC times the sign of e), sign of e kept inside "
+        f"±{shown('fFuzzySignBandZone1', got['fFuzzySignBandZone1'])}")
     time.sleep(1.0)
     shot(pg, "fuzzy", docs=True)
     pg.goto(stack.url + "/diag")

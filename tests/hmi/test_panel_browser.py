@@ -46,6 +46,9 @@ def login(page, stack: Stack, level: str, password: str = "") -> None:
     expect()(page.get_by_test_id("level")).to_have_text(f"level: {level}")
 
 
+WRITE_ACK_MS = 15000  # a write's acknowledgement on the page: a loaded machine takes seconds
+
+
 def wait_for(predicate, timeout: float, what: str, step: float = 0.2):
     t0 = time.time()
     last = None
@@ -217,7 +220,7 @@ def test_tuning_reject_restores_and_accept_keeps(stack: Stack, pg) -> None:
     pg.goto(stack.url + "/zone/1")
     login(pg, stack, "engineer", ENGINEER_PASSWORD)
     pg.get_by_test_id("mode-IDLE").click()
-    expect()(pg.get_by_text("mode IDLE: accepted by the PLC")).to_be_visible()
+    expect()(pg.get_by_text("mode IDLE: accepted by the PLC")).to_be_visible(timeout=WRITE_ACK_MS)
     pg.get_by_test_id("in-setpoint").fill("200")
     pg.get_by_test_id("set-setpoint").click()
     expect()(pg.get_by_text("accepted by the PLC").first).to_be_visible()
@@ -244,7 +247,8 @@ def test_tuning_reject_restores_and_accept_keeps(stack: Stack, pg) -> None:
     expect()(pg.get_by_test_id("fp-state")).to_have_text("TUNED", timeout=20000)
     pg.get_by_test_id("mode-IDLE").click()
     expect()(pg.get_by_test_id("fp-state")).to_have_text("IDLE")
-    expect()(pg.get_by_text("mode IDLE: accepted by the PLC")).to_be_visible()  # the write is complete
+    # the write is complete
+    expect()(pg.get_by_text("mode IDLE: accepted by the PLC")).to_be_visible(timeout=WRITE_ACK_MS)
     # TUNE steps from a steady process towards W: let the hot end cool back towards 160 degC first
     # (started next to W, the tuner refuses with error 15, shown on the tuning page)
     wait_for(lambda: number(pg.get_by_test_id("fp-pv").inner_text()) < 170, 60, "the PV to cool down")
@@ -305,7 +309,9 @@ def test_fuzzy_and_diagnostics_pages(stack: Stack, pg) -> None:
     wait_for(lambda: stack.read("bFuzzyZone1")["bFuzzyZone1"], 10, "the fuzzy adapter coil to be on")
     expect()(pg.get_by_test_id("fz-table-note")).to_contain_text("Rule table of preset")
     expect()(pg.get_by_test_id("fz-explain")).to_contain_text("rule")
-    # the adapter's Ms bound on the accepted tuned set, as read over Modbus
+    # the adapter's Ms bound on the accepted tuned set, as read over Modbus (computed once it is enabled)
+    wait_for(lambda: stack.read("fFuzzyMsReachableZone1")["fFuzzyMsReachableZone1"] > 1.0, 10,
+             "the adapter's Ms bound")
     got = stack.read("fFuzzyMsReachableZone1", "fFuzzyMsMaxZone1", "fFuzzyBoxShareZone1",
                      "fFuzzyGainScaleZone1", "bFuzzySymmetricZone1", "fFuzzySignBandZone1")
     reachable, bound = got["fFuzzyMsReachableZone1"], got["fFuzzyMsMaxZone1"]

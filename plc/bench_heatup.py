@@ -1,0 +1,79 @@
+"""Scan cost of FB_CtrlHeatUp in the soft-PLC (`thermost bench` calls `run(quick)`).
+
+One PROGRAM calls the block once per scan on seed 003's model with X rising like the plant's limit-step
+response (so the rise detection, the slope filters and the seen-T average all run), then resting at the
+target, and the next response (the other way) starting every 400 scans; the same program without the
+call is the baseline that is subtracted. Printed: CPU microseconds per call and its share of a 10 ms
+cycle, in the soft-PLC (a Python interpreter of the ST; a compiled PLC is one to two orders of magnitude
+faster).
+"""
+
+from __future__ import annotations
+
+import time
+
+from plc.library_program import library_sources
+
+CYCLE_BUDGET_US = 10_000.0  # a 10 ms PLC cycle
+SCANS_FULL = 2000
+SCANS_QUICK = 400
+RESTART_SCANS = 400  # one response: limit phase and path, then a new target
+HOLD_FROM_SCAN = 250  # X rests at the target from here, so the next response starts from rest
+
+
+def program(with_block: bool) -> str:
+    call = ("  fbHu(bEnable := TRUE, fW := fW, fX := fX, fY0 := fY0, fKs := 0.5916, fTu := 10.6,\n"
+            "       fTg := 23.4, fYMin := 0.0, fYMax := 100.0, fMinStep := 5.0, fCycleTime := 0.1);\n"
+            "  IF fbHu.bActive THEN\n    nActive := nActive + 1;\n  END_IF;\n"
+            if with_block else "")
+    return (
+        "PROGRAM P_Bench\n  VAR\n    fbHu : FB_CtrlHeatUp;\n    nScan : INT;\n    fT : REAL;\n"
+        "    fX : REAL := 160.0;\n    fW : REAL := 160.0;\n    fY0 : REAL;\n    nActive : DINT;\n  END_VAR\n"
+        "  nScan := nScan + 1;\n"
+        f"  IF nScan >= {RESTART_SCANS} THEN\n    nScan := 0;\n    fW := 360.0 - fW;\n  END_IF;\n"
+        "  fT := INT_TO_REAL(nScan) * 0.1;\n"
+        "  fX := 160.0;\n"
+        "  IF fT > 10.6 THEN\n    fX := 160.0 + 59.16 * (1.0 - EXP(-(fT - 10.6) / 23.4));\n  END_IF;\n"
+        f"  IF nScan >= {HOLD_FROM_SCAN} THEN\n    fX := 200.0;\n  END_IF;\n"
+        "  fY0 := 0.0;\n"
+        "  IF fW < 180.0 THEN\n    fX := 360.0 - fX;\n    fY0 := 67.6;\n  END_IF;\n"
+        f"{call}END_PROGRAM\n\n"
+        "CONFIGURATION Config0\n  RESOURCE Res0 ON PLC\n"
+        "    TASK task0(INTERVAL := T#10ms, PRIORITY := 0);\n    PROGRAM inst0 WITH task0 : P_Bench;\n"
+        "  END_RESOURCE\nEND_CONFIGURATION\n"
+    )
+
+
+def time_scans(text: str, scans: int) -> tuple[float, object]:
+    from plc.st.compiler import load_application
+
+    app = load_application(library_sources() + [("bench_heatup.st", text)])
+    start = time.process_time()
+    for _ in range(scans):
+        app.scan()
+    return (time.process_time() - start) / scans * 1e6, app
+
+
+def heatup_cost(quick: bool) -> tuple[float, float]:
+    """Microseconds per FB_CtrlHeatUp call (baseline subtracted) and the share of calls with a response."""
+    scans = SCANS_QUICK if quick else SCANS_FULL
+    total, app = time_scans(program(True), scans)
+    base, _ = time_scans(program(False), scans)
+    return max(total - base, 0.0), app.get("inst0.nActive") / scans
+
+
+def run(quick: bool) -> None:
+    scans = SCANS_QUICK if quick else SCANS_FULL
+    print(f"FB_CtrlHeatUp scan cost in the soft-PLC ({scans} scans, responses restarted every "
+          f"{RESTART_SCANS}, baseline subtracted)")
+    try:
+        cost, active = heatup_cost(quick)
+    except Exception as exc:  # noqa: BLE001 - a benchmark reports, it does not fail
+        print(f"  not measured ({type(exc).__name__}: {exc})")
+        return
+    print(f"  {'model-based setpoint response (limit phase, path)':<58} {cost:8.1f} us/call  "
+          f"({cost / CYCLE_BUDGET_US * 100:5.2f} % of 10 ms; a response ran in {active:.0%} of the calls)")
+
+
+if __name__ == "__main__":
+    run(quick=False)

@@ -17,6 +17,11 @@ CYCLE_BUDGET_US = 10_000.0  # a 10 ms PLC cycle
 SCANS_FULL = 2000
 SCANS_QUICK = 300
 WARMUP_SCANS = 120  # > query-table build time (169 nodes / 4 per cycle)
+BENCH_CONFIGURATION = (  # runs the benchmark's PROGRAM P_Bench as instance inst0
+    "CONFIGURATION Config0\n  RESOURCE Res0 ON PLC\n"
+    "    TASK task0(INTERVAL := T#10ms, PRIORITY := 0);\n    PROGRAM inst0 WITH task0 : P_Bench;\n"
+    "  END_RESOURCE\nEND_CONFIGURATION\n"
+)
 
 
 @dataclass(frozen=True)
@@ -48,10 +53,7 @@ def program(settings: str, with_adapter: bool) -> str:
         "    bOk := FC_FuzzyLoadPreset(ePreset := eFUZZY_PRESET_TEXTBOOK, sRules := sFz.sRules);\n"
         f"    {settings}\n    bInit := TRUE;\n  END_IF;\n"
         "  fPhase := fPhase + 0.01;\n  fX := 60.0 - 0.6 * SIN(fPhase);\n"
-        f"{call}END_PROGRAM\n\n"
-        "CONFIGURATION Config0\n  RESOURCE Res0 ON PLC\n"
-        "    TASK task0(INTERVAL := T#10ms, PRIORITY := 0);\n    PROGRAM inst0 WITH task0 : P_Bench;\n"
-        "  END_RESOURCE\nEND_CONFIGURATION\n"
+        f"{call}END_PROGRAM\n\n" + BENCH_CONFIGURATION
     )
 
 

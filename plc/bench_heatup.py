@@ -10,9 +10,7 @@ faster).
 
 from __future__ import annotations
 
-import time
-
-from plc.library_program import library_sources
+from plc.bench_adapter import BENCH_CONFIGURATION, time_scans
 
 CYCLE_BUDGET_US = 10_000.0  # a 10 ms PLC cycle
 SCANS_FULL = 2000
@@ -37,21 +35,8 @@ def program(with_block: bool) -> str:
         f"  IF nScan >= {HOLD_FROM_SCAN} THEN\n    fX := 200.0;\n  END_IF;\n"
         "  fY0 := 0.0;\n"
         "  IF fW < 180.0 THEN\n    fX := 360.0 - fX;\n    fY0 := 67.6;\n  END_IF;\n"
-        f"{call}END_PROGRAM\n\n"
-        "CONFIGURATION Config0\n  RESOURCE Res0 ON PLC\n"
-        "    TASK task0(INTERVAL := T#10ms, PRIORITY := 0);\n    PROGRAM inst0 WITH task0 : P_Bench;\n"
-        "  END_RESOURCE\nEND_CONFIGURATION\n"
+        f"{call}END_PROGRAM\n\n" + BENCH_CONFIGURATION
     )
-
-
-def time_scans(text: str, scans: int) -> tuple[float, object]:
-    from plc.st.compiler import load_application
-
-    app = load_application(library_sources() + [("bench_heatup.st", text)])
-    start = time.process_time()
-    for _ in range(scans):
-        app.scan()
-    return (time.process_time() - start) / scans * 1e6, app
 
 
 def heatup_cost(quick: bool) -> tuple[float, float]:

@@ -85,6 +85,11 @@ def adapter_costs(quick: bool) -> list[tuple[str, float | None, str]]:
     return rows
 
 
+def cost_line(label: str, cost_us: float, note: str = "") -> str:
+    """One benchmark row: microseconds per call and the share of a 10 ms cycle."""
+    return f"  {label:<58} {cost_us:8.1f} us/call  ({cost_us / CYCLE_BUDGET_US * 100:5.2f} % of 10 ms){note}"
+
+
 def run(quick: bool) -> None:
     scans = SCANS_QUICK if quick else SCANS_FULL
     print(f"FB_FuzzyGainAdapter scan cost in the soft-PLC ({scans} scans per mode, baseline subtracted)")
@@ -92,8 +97,7 @@ def run(quick: bool) -> None:
         if cost is None:
             print(f"  {label}: {status}")
             continue
-        print(f"  {label:<58} {cost:8.1f} us/call  ({cost / CYCLE_BUDGET_US * 100:5.2f} % of 10 ms)"
-              f"  [{status}]")
+        print(cost_line(label, cost, f"  [{status}]"))
 
 
 if __name__ == "__main__":

@@ -10,9 +10,8 @@ faster).
 
 from __future__ import annotations
 
-from plc.bench_adapter import BENCH_CONFIGURATION, time_scans
+from plc.bench_adapter import BENCH_CONFIGURATION, cost_line, time_scans
 
-CYCLE_BUDGET_US = 10_000.0  # a 10 ms PLC cycle
 SCANS_FULL = 2000
 SCANS_QUICK = 400
 RESTART_SCANS = 400  # one response: limit phase and path, then a new target
@@ -56,8 +55,8 @@ def run(quick: bool) -> None:
     except Exception as exc:  # noqa: BLE001 - a benchmark reports, it does not fail
         print(f"  not measured ({type(exc).__name__}: {exc})")
         return
-    print(f"  {'model-based setpoint response (limit phase, path)':<58} {cost:8.1f} us/call  "
-          f"({cost / CYCLE_BUDGET_US * 100:5.2f} % of 10 ms; a response ran in {active:.0%} of the calls)")
+    print(cost_line("model-based setpoint response (limit phase, path)", cost,
+                    f"; a response ran in {active:.0%} of the calls"))
 
 
 if __name__ == "__main__":

@@ -34,6 +34,8 @@ def pg(stack: Stack, request):
 def expect():
     from playwright.sync_api import expect as _expect
 
+    # a page shows a write's outcome after the PLC answered: on a loaded machine that takes seconds
+    _expect.set_options(timeout=WRITE_TIMEOUT_MS)
     return _expect
 
 
@@ -44,9 +46,6 @@ def login(page, stack: Stack, level: str, password: str = "") -> None:
     page.get_by_test_id("login-password").fill(password)
     page.get_by_test_id("login-submit").click()
     expect()(page.get_by_test_id("level")).to_have_text(f"level: {level}")
-
-
-WRITE_ACK_MS = 15000  # a write's acknowledgement on the page: a loaded machine takes seconds
 
 
 def wait_for(predicate, timeout: float, what: str, step: float = 0.2):
@@ -220,7 +219,7 @@ def test_tuning_reject_restores_and_accept_keeps(stack: Stack, pg) -> None:
     pg.goto(stack.url + "/zone/1")
     login(pg, stack, "engineer", ENGINEER_PASSWORD)
     pg.get_by_test_id("mode-IDLE").click()
-    expect()(pg.get_by_text("mode IDLE: accepted by the PLC")).to_be_visible(timeout=WRITE_ACK_MS)
+    expect()(pg.get_by_text("mode IDLE: accepted by the PLC")).to_be_visible(timeout=WRITE_TIMEOUT_MS)
     pg.get_by_test_id("in-setpoint").fill("200")
     pg.get_by_test_id("set-setpoint").click()
     expect()(pg.get_by_text("accepted by the PLC").first).to_be_visible()
@@ -248,7 +247,7 @@ def test_tuning_reject_restores_and_accept_keeps(stack: Stack, pg) -> None:
     pg.get_by_test_id("mode-IDLE").click()
     expect()(pg.get_by_test_id("fp-state")).to_have_text("IDLE")
     # the write is complete
-    expect()(pg.get_by_text("mode IDLE: accepted by the PLC")).to_be_visible(timeout=WRITE_ACK_MS)
+    expect()(pg.get_by_text("mode IDLE: accepted by the PLC")).to_be_visible(timeout=WRITE_TIMEOUT_MS)
     # TUNE steps from a steady process towards W: let the hot end cool back towards 160 degC first
     # (started next to W, the tuner refuses with error 15, shown on the tuning page)
     wait_for(lambda: number(pg.get_by_test_id("fp-pv").inner_text()) < 170, 60, "the PV to cool down")

@@ -64,14 +64,14 @@ def controller(heat_up: bool, model=(K, T, L)) -> ScanDriver:
 
 
 def step_response(drv: ScanDriver, k: float = K, t: float = T, l: float = L,
-                  noise: float = 0.03) -> StepResult:
+                  noise: float = 0.03, w1: float = W1) -> StepResult:
     plant = Fopdt(k=k, t=t, l=l, x0=W0, dt=TS, noise=noise)  # 0.03: a live sensor's noise (frozen-PV check)
     drv.set("fbUut.fW1", W0)
     drv.set("nMode", ACTIVE)
     ts, ys, refs = [], [], []
     for n in range(round(HORIZON / TS)):
         if n == round(STEP_AT / TS):
-            drv.set("fbUut.fW1", W1)
+            drv.set("fbUut.fW1", w1)
         drv.set("fbUut.fX", plant.measure())
         drv.set("fbUut.nPvSequence", n + 1)
         drv.scan()
@@ -82,11 +82,13 @@ def step_response(drv: ScanDriver, k: float = K, t: float = T, l: float = L,
             ys.append(plant.x)
             refs.append((drv.get("fbUut.fbHeatUp.bActive"), drv.get("fbUut.fbHeatUp.bLimitPhase"),
                          drv.get("fbUut.fbHeatUp.fWRef"), drv.get("fbUut.fXUsed")))
-    outside = [tt for tt, y in zip(ts, ys, strict=True) if abs(y - W1) > BAND * (W1 - W0)]
+    outside = [tt for tt, y in zip(ts, ys, strict=True) if abs(y - w1) > BAND * abs(w1 - W0)]
     settling = outside[-1] + TS if outside else 0.0
     if outside and outside[-1] >= ts[-1] - TS:
         settling = math.inf
-    return StepResult(settling, max(0.0, max(ys) - W1) / (W1 - W0) * 100.0, ts, ys, refs)
+    direction = math.copysign(1.0, w1 - W0)
+    overshoot = max(0.0, max((y - w1) * direction for y in ys)) / abs(w1 - W0) * 100.0
+    return StepResult(settling, overshoot, ts, ys, refs)
 
 
 def bound_s(k: float = K, t: float = T, l: float = L) -> float:
@@ -112,6 +114,22 @@ def test_seed003_step_within_the_bound_without_overshoot() -> None:
     assert with_model.settling_s <= 1.05 * bound
     assert with_model.overshoot_pct <= 0.5
     assert with_model.settling_s < plain.settling_s
+
+
+def test_a_cool_down_mirrors_the_heat_up() -> None:
+    """Split range (fYMin -100 %) with the same set for cooling: 160 -> 120 degC runs the cooling limit,
+    then the holding power; on this linear plant the mirror of the heating step, so the same bound."""
+    drv = controller(heat_up=True)
+    kp, tn, tv = PID_SET
+    for name, value in dict(fYMin=-100.0, fKpCool=kp, fTnCool=tn, fTvCool=tv, fTdCool=TD_SHARE * tv,
+                            fTempAbsLow=-100.0).items():
+        drv.set(f"sPar.{name}", value)
+    res = step_response(drv, w1=2.0 * W0 - W1)
+    bound = bound_s()
+    print(f"cool-down 160->120 degC: {res.settling_s:.1f} s (mirror bound {bound:.1f} s), "
+          f"{res.overshoot_pct:.2f} %")
+    assert res.settling_s <= 1.05 * bound
+    assert res.overshoot_pct <= 0.5
 
 
 def test_without_a_usable_model_it_is_the_plain_pid() -> None:

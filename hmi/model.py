@@ -56,6 +56,7 @@ PANEL_ROLES: dict[str, str] = {
     "fz_symmetric": "bFuzzySymmetricZone{n}",
     "fz_sign_band": "fFuzzySignBandZone{n}",
     "tau_norm": "fTauNormZone{n}",
+    "heat_up": "bHeatUpZone{n}",
 }
 FUZZY_RULES = 4  # fFuzzyRule<k>StrengthZone<n> / nFuzzyRule<k>Zone<n>, k = 1..FUZZY_RULES
 # the tuned set a reject restores (heating and cooling), in register order

@@ -135,6 +135,7 @@ def zone_page(number: str) -> None:
                 with ui.row().classes("items-baseline"):
                     ui.label(text).classes("w-20 text-grey-8")
                     labels[role] = ui.label().classes("text-h6").props(f'data-testid="fp-{role}"')
+            heatup = ui.label().props('data-testid="fp-heatup"')
         with ui.column():
             ui.label("Mode").classes("text-subtitle1")
             with ui.row():
@@ -147,7 +148,8 @@ def zone_page(number: str) -> None:
             _entry(z, "manual", "manual output", "y_min", "y_max")
             if z.has("setpoint2"):
                 _entry(z, "setpoint2", "standby setpoint", "w_min", "w_max")
-            for role, text in (("sel_setpoint", "standby setpoint active"), ("ramp", "setpoint ramp on")):
+            for role, text in (("sel_setpoint", "standby setpoint active"), ("ramp", "setpoint ramp on"),
+                               ("heat_up", "model-based heat-up on")):
                 if z.has(role):
                     sw = ui.switch(text, value=bool(p.value(z[role]))).props(f'data-testid="sw-{role}"')
                     sw.on_value_change(lambda e, r=role, s=sw: _switch(z, r, s, e.value))
@@ -168,12 +170,31 @@ def zone_page(number: str) -> None:
                 live_text(lab, lambda c=code, n=names: n.get(c, str(c)))
             else:
                 live_text(lab, lambda r=role: value_text(z[r], 2))
+        heatup.set_text(heatup_text(z))
         current = p.value(z["mode"])
         for mode, b in buttons.items():
             on = current is not None and p.model.codes.modes[mode] == int(current)
             b.props(f"color={'primary' if on else 'grey-6'}")
 
     ui.timer(0.2, refresh)
+
+
+def heatup_text(z: ZoneModel) -> str:
+    """The model-based setpoint response: its phase, and the plant its last limit phase saw beside the
+    identified model ("" when the zone has no such response or none ever ran)."""
+    p = panel()
+    if not (z.has("heatup_state") and z.has("heatup_tu") and z.has("heatup_tg")):
+        return ""
+    state = p.value(z["heatup_state"])
+    seen_tu, seen_tg = p.value(z["heatup_tu"]), p.value(z["heatup_tg"])
+    if state is None or seen_tu is None or seen_tg is None:
+        return ""
+    text = f"heat-up {value_text(z['heatup_state'])}"
+    if seen_tg > 0.0:
+        text += f"; plant seen: L {value_text(z['heatup_tu'])}, T {value_text(z['heatup_tg'])}"
+        if z.has("tu") and z.has("tg"):
+            text += f" (model L {value_text(z['tu'])}, T {value_text(z['tg'])})"
+    return text
 
 
 async def _switch(z: ZoneModel, role: str, sw: ui.switch, value: bool) -> None:

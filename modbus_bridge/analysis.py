@@ -11,6 +11,8 @@ Per phase:
 - a ramp: tracking error (IAE, max |e|) over the phase;
 - a phase the fuzzy adapter ran in, with its Ms bound in use: the worst Ms over the gain sets it can reach,
   the bound, the scale of the base gains and the share of the ratio box kept (as at the phase end);
+- a phase a model-based setpoint response ran in: the plant's dead time and time constant as its limit
+  phase saw them (heatup_tu_seen_s, heatup_tg_seen_s);
 - always: output total variation, saturation time, PWM switches per minute (PWM runs).
 """
 
@@ -54,6 +56,10 @@ ADAPTER_KEYS = {
     "fz_gain_scale": "fuzzy_gain_scale",
     "fz_box_share": "fuzzy_box_share",
 }
+
+
+# the plant as a model-based setpoint response that ran in the phase saw it (its limit phase)
+HEATUP_KEYS = {"heatup_tu": "heatup_tu_seen_s", "heatup_tg": "heatup_tg_seen_s"}
 
 
 @dataclass
@@ -159,6 +165,7 @@ def zone_metrics(result: RunResult, tr: ZoneTrace) -> list[PhaseMetrics]:
         pm.values.update(effort_metrics(t, y_cmd, plant.u_min_pct, plant.u_max_pct, pwm))
         if rec.adapter.get("fz_ms_reachable", 0.0) > 0.0:
             pm.values.update({ADAPTER_KEYS[k]: v for k, v in rec.adapter.items()})
+        pm.values.update({HEATUP_KEYS[k]: v for k, v in rec.heatup.items()})
         out.append(pm)
     return out
 

@@ -65,6 +65,10 @@ ROLE_PATTERNS: dict[str, tuple[str, ...]] = {
     "fz_ms_reachable": (r"fFuzzyMsReachableZone{n}",),
     "fz_gain_scale": (r"fFuzzyGainScaleZone{n}",),
     "fz_box_share": (r"fFuzzyBoxShareZone{n}",),
+    # the model-based setpoint response: its phase and the plant its last limit phase saw
+    "heatup_state": (r"nHeatUpStateZone{n}",),
+    "heatup_tu": (r"fHeatUpTuSeenZone{n}",),
+    "heatup_tg": (r"fHeatUpTgSeenZone{n}",),
     "kp_eff": (r"fFuzzyKpZone{n}", r"fKpEffZone{n}", r"fKpEffectiveZone{n}"),
     "tn_eff": (r"fFuzzyTnZone{n}", r"fTnEffZone{n}", r"fTnEffectiveZone{n}"),
     "tv_eff": (r"fFuzzyTvZone{n}", r"fTvEffZone{n}", r"fTvEffectiveZone{n}"),

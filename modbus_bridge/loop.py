@@ -45,6 +45,8 @@ GAIN_ROLES = (
 TUNED_ONLY_ROLES = ("t_filter", "ms", "noise_pp")
 # the fuzzy adapter's Ms bound, kept per phase while the adapter is on (the coil read with them)
 ADAPTER_ROLES = ("fz_ms_reachable", "fz_ms_max", "fz_gain_scale", "fz_box_share")
+# the plant as the model-based setpoint response saw it, kept per phase while a response runs
+HEATUP_ROLES = ("heatup_tu", "heatup_tg")
 TUNED_ROLES = ("kp", "tn", "tv", "kp_cool", "tn_cool", "tv_cool", "ks", "tu", "tg", *TUNED_ONLY_ROLES)
 PROGRESS_EVERY = 50  # plant steps between progress reports
 # plant steps between reads of gains, identified plant, state and error id (1 s at dt = 0.1 s); the state
@@ -69,6 +71,7 @@ class PhaseRecord:
     outcome: str = "ok"
     tuned: dict[str, float] = field(default_factory=dict)
     adapter: dict[str, float] = field(default_factory=dict)  # ADAPTER_ROLES, last read with the adapter on
+    heatup: dict[str, float] = field(default_factory=dict)  # HEATUP_ROLES, last read with a response running
 
 
 @dataclass
@@ -314,6 +317,8 @@ class _ReadPlan:
             slow += [b[r] for r in (*GAIN_ROLES, *TUNED_ONLY_ROLES) if b.has(r)]
             if b.has("fuzzy") and b.has("fz_ms_reachable"):
                 slow += [b["fuzzy"]] + [b[r] for r in ADAPTER_ROLES if b.has(r)]
+            if b.has("heatup_state"):
+                slow += [b["heatup_state"]] + [b[r] for r in HEATUP_ROLES if b.has(r)]
         return _ReadPlan(every, status, slow, [n for n in every if client.regmap[n].is_bit])
 
 
@@ -473,6 +478,10 @@ class _LoopCloser:
                 if b.has("fuzzy") and b.has("fz_ms_reachable") and self.slow_values[b["fuzzy"]]:
                     tr.phases[-1].adapter = {
                         r: float(self.slow_values[b[r]]) for r in ADAPTER_ROLES if b.has(r)
+                    }
+                if b.has("heatup_state") and self.slow_values[b["heatup_state"]]:
+                    tr.phases[-1].heatup = {
+                        r: float(self.slow_values[b[r]]) for r in HEATUP_ROLES if b.has(r)
                     }
 
     def planned_total(self, t: float, horizon: float) -> float:

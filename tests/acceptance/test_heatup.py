@@ -74,6 +74,23 @@ def test_the_step_settles_at_the_bound_without_overshoot(nominal):
     assert step["iae_c_s"] < alone["iae_c_s"]
 
 
+SEEN_TOLERANCE = 0.15  # the plant as the limit phase saw it, against the true plant
+
+
+def _plant_seen(step: dict, time_constant_scale: float) -> None:
+    p = load_scenario(resolve_scenario(SCENARIO)).plant_params
+    true_tu, true_tg = p["dead_time_s"], p["time_constant_s"] * time_constant_scale
+    tu, tg = step["heatup_tu_seen_s"], step["heatup_tg_seen_s"]
+    assert tu == pytest.approx(true_tu, rel=SEEN_TOLERANCE), f"dead time seen {tu:.2f} s, plant {true_tu} s"
+    assert tg == pytest.approx(true_tg, rel=SEEN_TOLERANCE), f"time constant seen {tg:.2f} s, plant {true_tg}"
+
+
+def test_the_response_reports_the_plant_it_saw(nominal):
+    """Over Modbus (fHeatUpTuSeen, fHeatUpTgSeen): the plant's L and T within 15 %; none without one."""
+    _plant_seen(nominal[MODEL_BASED]["step"].values, 1.0)
+    assert "heatup_tu_seen_s" not in nominal[PID_ONLY]["step"].values
+
+
 def test_the_hand_over_from_tune_costs_nothing(nominal):
     """TUNE ends with the plant still rising: the response takes it at the output that would hold it."""
     ret = nominal[MODEL_BASED]["return"].values
@@ -88,8 +105,10 @@ def test_the_hand_over_from_tune_costs_nothing(nominal):
 @pytest.mark.parametrize("scale", [0.7, 1.3])
 def test_a_plant_off_its_model_stays_within_the_goals(harness, scale):
     step = _run(harness, scale, (MODEL_BASED,))[MODEL_BASED]["step"].values
+    _plant_seen(step, scale)  # the time constant it saw is the changed plant's, not the model's
     bound = _bound_s(scale)
     print(f"T x{scale}: bound {bound:.1f} s; model-based {step['settling_time_2pct_s']:.1f} s, "
-          f"{step['overshoot_pct']:.2f} %")
+          f"{step['overshoot_pct']:.2f} %; seen L {step['heatup_tu_seen_s']:.2f} s, "
+          f"T {step['heatup_tg_seen_s']:.1f} s")
     assert step["overshoot_pct"] <= MISMATCH_OVERSHOOT_PCT
     assert step["settling_time_2pct_s"] <= MISMATCH_RATIO * bound

@@ -352,3 +352,50 @@ def test_lost_plc_shows_the_banner_and_the_panel_recovers(stack: Stack, pg) -> N
         wait_for(lambda: pg.get_by_test_id("pv-1").inner_text() != first, 10, "live values after recovery")
     finally:
         stack.sim_command("load 1 0")
+
+
+def test_the_faceplate_shows_the_heat_up_and_the_plant_it_saw(stack: Stack, pg) -> None:
+    """Switched on at the faceplate, the model-based setpoint response runs on a setpoint change; the page
+    then shows the plant its limit phase saw beside the identified model, as the PLC reports them."""
+    pg.goto(stack.url + "/zone/1")
+    login(pg, stack, "engineer", ENGINEER_PASSWORD)
+    if not stack.read("fKsZone1")["fKsZone1"] > 0.0:  # no identified model yet: TUNE gives one
+        pg.get_by_test_id("in-setpoint").fill("200")
+        pg.get_by_test_id("set-setpoint").click()
+        expect()(pg.get_by_text("accepted by the PLC").first).to_be_visible()
+        _tune(stack, pg)
+        pg.goto(stack.url + "/zone/1")
+    expect()(pg.get_by_test_id("fp-state")).not_to_have_text("-")
+    switch = pg.get_by_test_id("sw-heat_up")
+    if not stack.read("bHeatUpZone1")["bHeatUpZone1"]:
+        switch.click()
+        wait_for(lambda: stack.read("bHeatUpZone1")["bHeatUpZone1"], 15, "the heat-up coil to be on")
+    # a fault another test injected may have left latched alarms: RESET clears them
+    pg.get_by_test_id("mode-RESET").click()
+    expect()(pg.get_by_text("mode RESET: accepted by the PLC")).to_be_visible()
+    expect()(pg.get_by_test_id("fp-state")).to_have_text("RESET")
+    pg.get_by_test_id("mode-ACTIVE").click()
+    expect()(pg.get_by_text(re.compile("mode ACTIVE: "))).to_contain_text("accepted by the PLC")
+    expect()(pg.get_by_test_id("fp-state")).to_have_text("ACTIVE")
+    # from rest at W (after TUNE the hot end is still on its way), so the response starts from a steady plant
+    w = stack.read("fSetpointZone1")["fSetpointZone1"]
+    wait_for(lambda: abs(stack.read("fPvZone1")["fPvZone1"] - w) < 0.5
+             and stack.read("nHeatUpStateZone1")["nHeatUpStateZone1"] == 0, 90, "the hot end to rest at W")
+    seen_before = stack.read("fHeatUpTgSeenZone1")["fHeatUpTgSeenZone1"]
+    pg.get_by_test_id("in-setpoint").fill(f"{w - 20.0:.0f}")
+    pg.get_by_test_id("set-setpoint").click()
+    state = pg.get_by_test_id("fp-heatup")
+    wait_for(lambda: stack.read("fHeatUpTgSeenZone1")["fHeatUpTgSeenZone1"] not in (0.0, seen_before), 60,
+             "the response's limit phase to measure the plant")
+    wait_for(lambda: stack.read("nHeatUpStateZone1")["nHeatUpStateZone1"] == 0, 60, "the response to end")
+    got = stack.read("fHeatUpTuSeenZone1", "fHeatUpTgSeenZone1", "fTuZone1", "fTgZone1")
+    expect()(state).to_have_text(
+        f"heat-up NONE; plant seen: L {shown('fHeatUpTuSeenZone1', got['fHeatUpTuSeenZone1'])}, "
+        f"T {shown('fHeatUpTgSeenZone1', got['fHeatUpTgSeenZone1'])} (model L "
+        f"{shown('fTuZone1', got['fTuZone1'])}, T {shown('fTgZone1', got['fTgZone1'])})")
+    # (how close the measurement is: tests/acceptance/test_heatup.py, stepped; the panel's simulator runs in
+    # real time, where a busy machine's PLC falls behind the plant)
+    assert got["fHeatUpTgSeenZone1"] > 0.0 and got["fHeatUpTuSeenZone1"] > 0.0
+    shot(pg, "faceplate-heatup", docs=True)
+    switch.click()
+    wait_for(lambda: not stack.read("bHeatUpZone1")["bHeatUpZone1"], 15, "the heat-up coil to be off")

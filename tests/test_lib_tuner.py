@@ -380,3 +380,16 @@ def test_the_users_filter_wins_and_tune_then_sizes_none(uut) -> None:
     uut.set("sPar.bFilter", False)
     uut.scan()
     assert uut.get("fbUut.fTFilterUsed") == 0.0
+
+
+def test_a_process_still_drifting_at_rest_is_not_taken_for_noise(uut) -> None:
+    """TUNE started while the hot end still cools (3 degC above its rest, T = 140 s): the band it waits in
+    holds about 0.4 degC of drift; the noise it publishes is the sensor's (uniform +-0.02 degC), so the
+    filter, the derivative filter and AUTO's noise-limited Kp are not sized for the drift."""
+    plant = Fopdt(k=3.4, t=140.0, l=5.5, x0=25.0, noise=0.02, rng=random.Random(4))
+    plant.x = 28.0
+    run_tune(uut, plant, w=200.0, y_tune=60.0)
+    assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
+    noise = uut.get("sPar.fTuneNoisePp")
+    drift = 0.4  # degC the band held over fTuneStabilisation (20 s) at the start of the cool-down
+    assert 0.0 < noise < drift / 2, f"published noise {noise:.3f} degC"

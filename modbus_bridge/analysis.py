@@ -56,9 +56,7 @@ ADAPTER_KEYS = {
     "fz_gain_scale": "fuzzy_gain_scale",
     "fz_box_share": "fuzzy_box_share",
 }
-
-
-# the plant as a model-based setpoint response that ran in the phase saw it (its limit phase)
+# the plant as a model-based setpoint response that ran in the phase measured it (its limit phase)
 HEATUP_KEYS = {"heatup_tu": "heatup_tu_seen_s", "heatup_tg": "heatup_tg_seen_s"}
 
 
@@ -163,9 +161,10 @@ def zone_metrics(result: RunResult, tr: ZoneTrace) -> list[PhaseMetrics]:
             else u
         )
         pm.values.update(effort_metrics(t, y_cmd, plant.u_min_pct, plant.u_max_pct, pwm))
-        if rec.adapter.get("fz_ms_reachable", 0.0) > 0.0:
-            pm.values.update({ADAPTER_KEYS[k]: v for k, v in rec.adapter.items()})
-        pm.values.update({HEATUP_KEYS[k]: v for k, v in rec.heatup.items()})
+        adapter = rec.running.get("adapter", {})
+        if adapter.get("fz_ms_reachable", 0.0) > 0.0:
+            pm.values.update({ADAPTER_KEYS[k]: v for k, v in adapter.items()})
+        pm.values.update({HEATUP_KEYS[k]: v for k, v in rec.running.get("heatup", {}).items()})
         out.append(pm)
     return out
 

@@ -43,10 +43,13 @@ GAIN_ROLES = (
 # read with the gains but kept only as tuning results (no trace): the filter TUNE sized, its set's Ms and
 # the sensor noise it measured at rest
 TUNED_ONLY_ROLES = ("t_filter", "ms", "noise_pp")
-# the fuzzy adapter's Ms bound, kept per phase while the adapter is on (the coil read with them)
-ADAPTER_ROLES = ("fz_ms_reachable", "fz_ms_max", "fz_gain_scale", "fz_box_share")
-# the plant as the model-based setpoint response saw it, kept per phase while a response runs
-HEATUP_ROLES = ("heatup_tu", "heatup_tg")
+# read with the gains and kept per phase while a feature runs: group -> (the role that is non-zero while it
+# runs, the roles kept): the fuzzy adapter's Ms bound while its coil is on, the plant as the model-based
+# setpoint response measured it while a response runs
+RUNNING_GROUPS: dict[str, tuple[str, tuple[str, ...]]] = {
+    "adapter": ("fuzzy", ("fz_ms_reachable", "fz_ms_max", "fz_gain_scale", "fz_box_share")),
+    "heatup": ("heatup_state", ("heatup_tu", "heatup_tg")),
+}
 TUNED_ROLES = ("kp", "tn", "tv", "kp_cool", "tn_cool", "tv_cool", "ks", "tu", "tg", *TUNED_ONLY_ROLES)
 PROGRESS_EVERY = 50  # plant steps between progress reports
 # plant steps between reads of gains, identified plant, state and error id (1 s at dt = 0.1 s); the state
@@ -70,8 +73,8 @@ class PhaseRecord:
     disturbances: list[tuple[float, str, float | str | None]] = field(default_factory=list)
     outcome: str = "ok"
     tuned: dict[str, float] = field(default_factory=dict)
-    adapter: dict[str, float] = field(default_factory=dict)  # ADAPTER_ROLES, last read with the adapter on
-    heatup: dict[str, float] = field(default_factory=dict)  # HEATUP_ROLES, last read with a response running
+    # RUNNING_GROUPS: group -> {role: value} as last read while the feature ran
+    running: dict[str, dict[str, float]] = field(default_factory=dict)
 
 
 @dataclass
@@ -315,10 +318,9 @@ class _ReadPlan:
             if scenario.output_path == "pwm":
                 every += [b["pwm_heat"]] + ([b["pwm_cool"]] if b.has("pwm_cool") else [])
             slow += [b[r] for r in (*GAIN_ROLES, *TUNED_ONLY_ROLES) if b.has(r)]
-            if b.has("fuzzy") and b.has("fz_ms_reachable"):
-                slow += [b["fuzzy"]] + [b[r] for r in ADAPTER_ROLES if b.has(r)]
-            if b.has("heatup_state"):
-                slow += [b["heatup_state"]] + [b[r] for r in HEATUP_ROLES if b.has(r)]
+            for gate, roles in RUNNING_GROUPS.values():
+                if b.has(gate) and b.has(roles[0]):
+                    slow += [b[gate]] + [b[r] for r in roles if b.has(r)]
         return _ReadPlan(every, status, slow, [n for n in every if client.regmap[n].is_bit])
 
 
@@ -475,14 +477,11 @@ class _LoopCloser:
                 for role in TUNED_ROLES:
                     if b.has(role):
                         tr.phases[-1].tuned[role] = float(self.slow_values[b[role]])
-                if b.has("fuzzy") and b.has("fz_ms_reachable") and self.slow_values[b["fuzzy"]]:
-                    tr.phases[-1].adapter = {
-                        r: float(self.slow_values[b[r]]) for r in ADAPTER_ROLES if b.has(r)
-                    }
-                if b.has("heatup_state") and self.slow_values[b["heatup_state"]]:
-                    tr.phases[-1].heatup = {
-                        r: float(self.slow_values[b[r]]) for r in HEATUP_ROLES if b.has(r)
-                    }
+                for group, (gate, roles) in RUNNING_GROUPS.items():
+                    if b.has(gate) and b.has(roles[0]) and self.slow_values[b[gate]]:
+                        tr.phases[-1].running[group] = {
+                            r: float(self.slow_values[b[r]]) for r in roles if b.has(r)
+                        }
 
     def planned_total(self, t: float, horizon: float) -> float:
         """The plant time the run needs as planned at time t (the progress total)."""

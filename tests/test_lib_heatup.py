@@ -23,21 +23,16 @@ from modbus_bridge.plants.response import (
     sample_delay,
 )
 from tests.st_helpers import ScanDriver, controller_program, load_test_app
-from tests.test_lib_tuner import Fopdt
+from tests.test_lib_tuner import RULE_AMIGO, Fopdt, rule_values
 
 IDLE, ACTIVE = 0, 2
 TS = 0.1
 K, T, L = 0.5916, 23.4, 10.6  # seed 003 (scenario seed003_hotend_fuzzy), identified = true here
-TD_SHARE = 0.25  # fTuneTd: Td = 0.25 Tv
 ROBUST_MS = 1.6  # the feedback part's robustness goal
 
 
-def amigo(k: float, t: float, l: float) -> tuple[float, float, float]:
-    """AMIGO PID (FC_ApplyTuningRule; AUTO's rule at tau = L/(L+T) = 0.31): Kp, Tn, Tv."""
-    return ((0.2 + 0.45 * t / l) / k, l * (0.4 * l + 0.8 * t) / (l + 0.1 * t), 0.5 * l * t / (0.3 * l + t))
-
-
-PID_SET = amigo(K, T, L)
+# AUTO's rule at tau = L/(L+T) = 0.31, AMIGO, as documented: Kp, Tn, Tv, Td (the step size is CHR's only)
+PID_SET = rule_values(RULE_AMIGO, ks=K, tu=L, tg=T, vmax=0.0, dy=100.0)
 W0, W1 = 160.0, 200.0
 STEP_AT, HORIZON = 60.0, 300.0
 BAND = 0.02
@@ -54,8 +49,8 @@ class StepResult:
 
 def controller(heat_up: bool, model=(K, T, L)) -> ScanDriver:
     drv = ScanDriver(load_test_app(controller_program()))
-    kp, tn, tv = PID_SET
-    for name, value in dict(fKp=kp, fTn=tn, fTv=tv, fTd=TD_SHARE * tv, fYMin=0.0, fYMax=100.0, fWMax=300.0,
+    kp, tn, tv, td = PID_SET
+    for name, value in dict(fKp=kp, fTn=tn, fTv=tv, fTd=td, fYMin=0.0, fYMax=100.0, fWMax=300.0,
                             fXMax=400.0, fTempAbsHigh=300.0, fPvTimeout=0.0, fKs=model[0], fTg=model[1],
                             fTu=model[2]).items():
         drv.set(f"sPar.{name}", value)
@@ -98,8 +93,8 @@ def bound_s(k: float = K, t: float = T, l: float = L) -> float:
 
 def test_the_feedback_part_is_robust() -> None:
     omegas = np.logspace(-4, 1, 20000)
-    kp, tn, tv = PID_SET
-    loop = pid_frequency_response(kp, tn, tv, TD_SHARE * tv, omegas) * K * sample_delay(omegas, L) \
+    kp, tn, tv, td = PID_SET
+    loop = pid_frequency_response(kp, tn, tv, td, omegas) * K * sample_delay(omegas, L) \
         / (1j * omegas * T + 1.0)
     assert max_sensitivity(loop) <= ROBUST_MS
 
@@ -120,8 +115,8 @@ def test_a_cool_down_mirrors_the_heat_up() -> None:
     """Split range (fYMin -100 %) with the same set for cooling: 160 -> 120 degC runs the cooling limit,
     then the holding power; on this linear plant the mirror of the heating step, so the same bound."""
     drv = controller(heat_up=True)
-    kp, tn, tv = PID_SET
-    for name, value in dict(fYMin=-100.0, fKpCool=kp, fTnCool=tn, fTvCool=tv, fTdCool=TD_SHARE * tv,
+    kp, tn, tv, td = PID_SET
+    for name, value in dict(fYMin=-100.0, fKpCool=kp, fTnCool=tn, fTvCool=tv, fTdCool=td,
                             fTempAbsLow=-100.0).items():
         drv.set(f"sPar.{name}", value)
     res = step_response(drv, w1=2.0 * W0 - W1)

@@ -11,26 +11,22 @@ import dataclasses
 
 import pytest
 
-from modbus_bridge.plants.response import PlantModel, bang_hold_bound
 from modbus_bridge.scenario import Disturbance, load_scenario, resolve_scenario
+from tests.test_lib_heatup import bound_s
 
 from .conftest import run_scenario
 
 SCENARIO = "seed003_heatup"
 MODEL_BASED, PID_ONLY = "model-based PID", "PID (AUTO)"
-W0, W1 = 160.0, 200.0
 NOMINAL_RATIO, NOMINAL_OVERSHOOT_PCT = 1.05, 0.5
 MISMATCH_RATIO, MISMATCH_OVERSHOOT_PCT = 1.5, 2.0
 ROBUST_MS = 1.6
-HORIZON_S = 200.0  # bound search horizon
 
 
 def _bound_s(time_constant_scale: float) -> float:
-    sc = load_scenario(resolve_scenario(SCENARIO))
-    p = sc.plant_params
-    pm = PlantModel("fopdt", dict(gain_c_per_pct=p["gain_c_per_pct"], dead_time_s=p["dead_time_s"],
-                                  time_constant_s=p["time_constant_s"] * time_constant_scale, ambient_c=W0))
-    return bang_hold_bound(pm, W0, W1, sc.dt_s, HORIZON_S).settling_s
+    """The bang-hold bound of the scenario's true plant (same step 160 -> 200 degC and 0.1 s step)."""
+    p = load_scenario(resolve_scenario(SCENARIO)).plant_params
+    return bound_s(k=p["gain_c_per_pct"], t=p["time_constant_s"] * time_constant_scale, l=p["dead_time_s"])
 
 
 def _run(harness, time_constant_scale: float = 1.0,

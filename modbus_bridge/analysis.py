@@ -30,6 +30,7 @@ from .metrics import (
     disturbance_metrics,
     effort_metrics,
     error_integrals,
+    overshoot_pct,
     settled_noise_metrics,
     step_metrics,
 )
@@ -129,6 +130,9 @@ def zone_metrics(result: RunResult, tr: ZoneTrace) -> list[PhaseMetrics]:
             settled = rec.t_start + pm.values["settling_time_2pct_s"]
             output, true_c = _in_window(tr.y, tr, rec), _in_window(tr.true_c, tr, rec)
             pm.values.update(settled_noise_metrics(t, output, true_c, rec.setpoint, settled))
+            if true_c.size:
+                # the process's own overshoot: a quantised, noisy PV adds its noise counts to the peak
+                pm.values["true_overshoot_pct"] = overshoot_pct(true_c, float(true_c[0]), rec.setpoint)
         elif rec.ramp_c_per_min is not None:
             pm.kind = "ramp"
             e = sp - y

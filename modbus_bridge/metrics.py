@@ -63,6 +63,16 @@ class StepWindow:
         return self.y_final - self.y0
 
 
+def overshoot_pct(y: np.ndarray, y0: float, y_final: float) -> float:
+    """100 (y_max - y_final) / (y_final - y0), y_max taken in the step's direction; 0 when y stays short."""
+    step = y_final - y0
+    if step == 0.0 or y.size == 0:
+        return math.nan
+    size = abs(step)
+    peak = float(np.max(math.copysign(1.0, step) * (y - y0)))
+    return max(0.0, 100.0 * (peak - size) / size)
+
+
 def step_metrics(w: StepWindow) -> dict[str, float]:
     """Step-response metrics of a window that starts at the step (t0, y0) and aims at y_final."""
     step = w.step
@@ -84,8 +94,7 @@ def step_metrics(w: StepWindow) -> dict[str, float]:
     out["rise_time_s"] = hi - lo
     out["settling_time_2pct_s"] = settling_time(w.t, w.y, w.y_final, BAND_2PCT * size, w.t0)
     out["settling_time_5pct_s"] = settling_time(w.t, w.y, w.y_final, BAND_5PCT * size, w.t0)
-    peak = float(dev.max())
-    out["overshoot_pct"] = max(0.0, 100.0 * (peak - size) / size)
+    out["overshoot_pct"] = overshoot_pct(w.y, w.y0, w.y_final)
     out["undershoot_pct"] = max(0.0, -100.0 * float(dev.min()) / size)
     out["peak_c"] = float(w.y[int(np.argmax(dev))])
     out.update(error_integrals(w.t, w.y_final - w.y, w.t0))

@@ -149,6 +149,7 @@ def _sensor(t: SensorTable) -> SensorSpec:
         pullup_ohm=t.pullup_ohm,
         r25_ohm=t.r25_ohm,
         beta_k=t.beta_k,
+        noise_lsb=t.adc_noise_lsb,
     )
     return SensorSpec(lag_s=t.lag_s, noise_sigma_c=t.noise_sigma_c, offset_c=t.offset_c, adc=adc)
 

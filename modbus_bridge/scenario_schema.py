@@ -33,6 +33,7 @@ from pydantic import ValidationError as ValidationError  # re-exported for scena
 from pydantic_core import PydanticCustomError
 
 from .plants import PLANT_MODELS
+from .sensors import DEFAULT_ADC_NOISE_LSB
 
 MODES = ("IDLE", "PASSIVE", "ACTIVE", "RESET", "MANUAL", "TUNE")
 PV_PATHS = ("real", "raw")
@@ -208,6 +209,7 @@ class SensorTable(_Strict):
     pullup_ohm: Positive = 4700.0
     r25_ohm: Positive = 100_000.0
     beta_k: Positive = 3950.0
+    adc_noise_lsb: NonNegative = DEFAULT_ADC_NOISE_LSB
 
 
 class ZoneTable(_Strict):

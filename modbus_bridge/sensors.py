@@ -31,6 +31,7 @@ CVD_B = -5.775e-7
 CVD_C = -4.183e-12
 PT100_R0_OHM = 100.0
 PT100_RANGE_C = (-200.0, 850.0)
+DEFAULT_ADC_NOISE_LSB = 0.3
 
 
 def pt100_resistance(temp_c: float, r0_ohm: float = PT100_R0_OHM) -> float:
@@ -87,20 +88,25 @@ class AdcFrontEnd:
     pullup_ohm: float = 4700.0
     r25_ohm: float = 100_000.0
     beta_k: float = 3950.0
+    # the converter's own transition noise, LSB rms, before rounding: SAR converters of 12 to 16 bits state
+    # 0.3 to 1 LSB; without it a quiet reading between two codes would stay bit-identical for minutes,
+    # which no real input card does (and which the frozen-PV protection rightly calls a fault)
+    noise_lsb: float = DEFAULT_ADC_NOISE_LSB
 
     @property
     def full_scale(self) -> int:
         return (1 << self.bits) - 1
 
-    def to_counts(self, temp_c: float) -> int:
+    def to_counts(self, temp_c: float, noise_lsb: float = 0.0) -> int:
+        """The code the converter returns for temp_c, with noise_lsb (LSB) added before rounding."""
         if self.kind == "pt100":
-            counts = round((pt100_resistance(temp_c) - self.ohm_at_zero) / self.ohm_per_count)
+            exact = (pt100_resistance(temp_c) - self.ohm_at_zero) / self.ohm_per_count
         elif self.kind == "ntc":
             r = ntc_resistance(temp_c, self.r25_ohm, self.beta_k)
-            counts = round(self.full_scale * r / (r + self.pullup_ohm))
+            exact = self.full_scale * r / (r + self.pullup_ohm)
         else:
             raise ValueError("front end 'none' has no raw counts")
-        return int(min(max(counts, 0), self.full_scale))
+        return int(min(max(round(exact + noise_lsb), 0), self.full_scale))
 
     def from_counts(self, counts: int) -> float:
         if self.kind == "pt100":
@@ -147,7 +153,8 @@ class Sensor:
         if self.noise_sigma_c > 0.0:
             value += float(self._rng.normal(0.0, self.noise_sigma_c))
         if self.adc.kind != "none":
-            self.last_counts = self.adc.to_counts(value)
+            dither = float(self._rng.normal(0.0, self.adc.noise_lsb)) if self.adc.noise_lsb > 0.0 else 0.0
+            self.last_counts = self.adc.to_counts(value, dither)
             return self.adc.from_counts(self.last_counts)
         return value
 

@@ -283,16 +283,18 @@ def test_leaving_tune_aborts_and_keeps_parameters(uut) -> None:
     assert uut.get("sPar.fKp") == kp_before
 
 
-@pytest.mark.parametrize("seed", [1, 2, 3])
+@pytest.mark.parametrize("seed", [1, 2, 3, 4, 5, 6])
 def test_noisy_measurement_still_identified(uut, seed) -> None:
-    # noise spikes during the dead time must neither end the step nor fake the maximum slope
+    """Noise spikes during the dead time must neither end the step nor fake the maximum slope, and the fits
+    use every sample (history entries are means): at +-0.15 degC uniform noise Ks within 0.5 %, Tg within
+    1 % and Tu within 5 % (single samples as entries gave up to 0.9 %, 2.0 % and 8.6 % on these seeds)."""
     plant = Fopdt(k=3.4, t=140.0, l=5.5, x0=25.0, noise=0.15, rng=random.Random(seed))
     run_tune(uut, plant, w=200.0, y_tune=60.0)
     assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
     got = identified(uut)
-    assert got["fKs"] == pytest.approx(3.4, rel=0.10)
-    assert got["fTu"] == pytest.approx(5.5, rel=0.10)
-    assert got["fTg"] == pytest.approx(140.0, rel=0.10)
+    assert got["fKs"] == pytest.approx(3.4, rel=0.005)
+    assert got["fTu"] == pytest.approx(5.5, rel=0.05)
+    assert got["fTg"] == pytest.approx(140.0, rel=0.01)
 
 
 def test_negative_step_tunes_the_cooling_set(uut) -> None:

@@ -63,3 +63,28 @@ def test_sensor_faults_read_out_of_range():
     plain = Sensor()
     plain.fault = "open"
     assert plain.measure(50.0, 0.1) < -200.0
+
+
+def _longest_unchanged_run(sensor: Sensor, temp_c: float, samples: int) -> int:
+    longest = run = 0
+    last = None
+    for _ in range(samples):
+        v = sensor.measure(temp_c, 0.1)
+        run = run + 1 if v == last else 0
+        longest = max(longest, run)
+        last = v
+    return longest
+
+
+def test_converter_noise_keeps_a_quiet_reading_alive():
+    """A constant temperature at the centre of a code (as far from both transitions as it gets), sensor
+    noise 1/6 LSB (seed 003's hot end): the converter's own transition noise makes the reading move well
+    within the frozen-PV time (28 s = 280 samples), as a real input card's does; without it the reading
+    stays bit-identical longer than that, which the protection would rightly call frozen."""
+    frozen_samples = 280
+    adc = AdcFrontEnd(kind="ntc", bits=12)
+    code_centre = adc.from_counts(adc.to_counts(200.0))
+    real = Sensor(noise_sigma_c=0.02, adc=AdcFrontEnd(kind="ntc", bits=12), seed=1)
+    assert _longest_unchanged_run(real, code_centre, 20 * frozen_samples) < frozen_samples // 4
+    silent = Sensor(noise_sigma_c=0.02, adc=AdcFrontEnd(kind="ntc", bits=12, noise_lsb=0.0), seed=1)
+    assert _longest_unchanged_run(silent, code_centre, 20 * frozen_samples) >= frozen_samples

@@ -76,7 +76,8 @@ def test_pwm_output_path_averages_coils():
 def test_raw_pv_path_writes_adc_counts():
     sc = load_scenario(SCENARIO)
     zone = sc.zones[0]
-    sensor = dataclasses.replace(zone.sensor, adc=dataclasses.replace(zone.sensor.adc, kind="pt100"))
+    adc = dataclasses.replace(zone.sensor.adc, kind="pt100", noise_lsb=0.0)  # the exact count
+    sensor = dataclasses.replace(zone.sensor, adc=adc)
     sc = dataclasses.replace(sc, pv_path="raw", zones=[dataclasses.replace(zone, sensor=sensor)])
 
     async def go():

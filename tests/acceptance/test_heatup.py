@@ -1,7 +1,8 @@
 """The model-based setpoint response through Modbus (scenario seed003_heatup): seed 003's hot end tuned
 with AUTO (AMIGO, Ms <= 1.6 on its own model), then the step 160 -> 200 degC with the heat-up
 (bHeatUpZone1) against the same PID without it. Goals: 2 % settling within 1.05x the bang-hold bound of
-the true plant, overshoot <= 0.5 %; with the plant's time constant 30 % off after tuning, within 1.5x the
+the true plant, overshoot <= 0.5 % (of the true temperature; the PV's peak may add the noise measured at
+rest); with the plant's time constant 30 % off after tuning, within 1.5x the
 true plant's bound and 2 % overshoot. The hand-over from TUNE (a plant still moving) costs no IAE against
 the PID alone, and no output kick."""
 
@@ -58,15 +59,28 @@ def test_auto_tunes_a_robust_feedback_part(nominal):
     assert 0.0 < tune.values["tuned_ms"] <= ROBUST_MS, f"Ms {tune.values['tuned_ms']:.2f} of the tuned set"
 
 
+def _overshoot_within(values: dict, tune: dict, goal_pct: float, phase: str = "step") -> None:
+    """The goal holds for the true temperature; the PV's peak may add the noise the tuner measured at rest
+    (a 12-bit NTC reads 0.12 degC per count: one count is 0.3 % of this step)."""
+    phases = {p.name: p for p in load_scenario(resolve_scenario(SCENARIO)).zones[0].phases}
+    before = {"step": "return", "return": "tune"}[phase]
+    step_c = abs(phases[phase].setpoint_c - phases[before].setpoint_c)
+    noise_pct = 100.0 * tune["identified_noise_pp_c"] / step_c
+    assert values["true_overshoot_pct"] <= goal_pct, f"true overshoot {values['true_overshoot_pct']:.2f} %"
+    assert values["overshoot_pct"] <= goal_pct + noise_pct, \
+        f"PV overshoot {values['overshoot_pct']:.2f} % (noise {noise_pct:.2f} %)"
+
+
 def test_the_step_settles_at_the_bound_without_overshoot(nominal):
     step = nominal[MODEL_BASED]["step"].values
     alone = nominal[PID_ONLY]["step"].values
     bound = _bound_s(1.0)
     print(f"{SCENARIO}: bound {bound:.1f} s; model-based {step['settling_time_2pct_s']:.1f} s, "
-          f"{step['overshoot_pct']:.2f} %; PID alone {alone['settling_time_2pct_s']} s, "
+          f"{step['overshoot_pct']:.2f} % (true {step['true_overshoot_pct']:.2f} %); "
+          f"PID alone {alone['settling_time_2pct_s']} s, "
           f"{alone['overshoot_pct']:.2f} %")
     assert step["settling_time_2pct_s"] <= NOMINAL_RATIO * bound
-    assert step["overshoot_pct"] <= NOMINAL_OVERSHOOT_PCT
+    _overshoot_within(step, nominal[MODEL_BASED]["tune"].values, NOMINAL_OVERSHOOT_PCT)
     assert step["iae_c_s"] < alone["iae_c_s"]
 
 
@@ -91,7 +105,7 @@ def test_the_hand_over_from_tune_costs_nothing(nominal):
     """TUNE ends with the plant still rising: the response takes it at the output that would hold it."""
     ret = nominal[MODEL_BASED]["return"].values
     alone = nominal[PID_ONLY]["return"].values
-    assert ret["overshoot_pct"] <= NOMINAL_OVERSHOOT_PCT
+    _overshoot_within(ret, nominal[MODEL_BASED]["tune"].values, NOMINAL_OVERSHOOT_PCT, "return")
     assert ret["iae_c_s"] <= alone["iae_c_s"], f"IAE {ret['iae_c_s']:.0f} vs the PID's {alone['iae_c_s']:.0f}"
     # no output kick on the way down (total variation of the output, %)
     assert ret["tv_output_pct"] <= alone["tv_output_pct"], \
@@ -100,11 +114,12 @@ def test_the_hand_over_from_tune_costs_nothing(nominal):
 
 @pytest.mark.parametrize("scale", [0.7, 1.3])
 def test_a_plant_off_its_model_stays_within_the_goals(harness, scale):
-    step = _run(harness, scale, (MODEL_BASED,))[MODEL_BASED]["step"].values
+    run = _run(harness, scale, (MODEL_BASED,))[MODEL_BASED]
+    step = run["step"].values
     _plant_seen(step, scale)  # the time constant it saw is the changed plant's, not the model's
     bound = _bound_s(scale)
     print(f"T x{scale}: bound {bound:.1f} s; model-based {step['settling_time_2pct_s']:.1f} s, "
           f"{step['overshoot_pct']:.2f} %; seen L {step['heatup_tu_seen_s']:.2f} s, "
           f"T {step['heatup_tg_seen_s']:.1f} s")
-    assert step["overshoot_pct"] <= MISMATCH_OVERSHOOT_PCT
+    _overshoot_within(step, run["tune"].values, MISMATCH_OVERSHOOT_PCT)
     assert step["settling_time_2pct_s"] <= MISMATCH_RATIO * bound

@@ -24,11 +24,9 @@ RIPPLE_GOAL_C = 0.1  # half the peak-to-peak of the true temperature
 # the noise must not shift the mean temperature: half the ripple goal, so an offset cannot use up the band,
 # and a quarter of the sensor's standard deviation (what a biased filter or quantisation would show)
 OFFSET_BOUND_C = 0.05
-LAG_SHARE_DEFAULT = 0.1  # fTuneFilterLagShare's default (plc/app/tags.tsv)
 MS_FRAGILE = 2.0  # above: a fragile loop (FC_CtrlMaxSensitivity)
 VARIANT = "PID (self-tuned)"
 
-KP_NOISE_DEFAULT = 4.0  # fTuneNoiseKpOutput's default, % peak-to-peak (plc/app/tags.tsv)
 FILTER_PASS_MIN = 0.5  # noise std ratio of the sized actual-value filter at its lag bound, at least
 
 
@@ -50,28 +48,37 @@ def noisy(harness):
     return {m.phase: m for m in _noisy_seed002(harness)}
 
 
-def test_tuning_succeeds_and_sizes_the_filter_within_its_lag_bound(noisy):
+def _default(harness: HarnessSetup, name: str) -> float:
+    """A parameter's default as the register map declares it."""
+    default = harness.regmap[f"{name}Zone1"].meta.default
+    assert default is not None, f"{name} declares no default"
+    return default
+
+
+def test_tuning_succeeds_and_sizes_the_filter_within_its_lag_bound(noisy, harness):
     tune = noisy["tune"]
     assert tune.outcome == "ok", f"tuning did not complete at {SENSOR_NOISE_C} degC noise: {tune.outcome}"
     v = tune.values
     tu, tf, ms = v["identified_tu_s"], v["tuned_filter_s"], v["tuned_ms"]
     assert tu > 0.0
     # the P part's noise at this level needs more filtering than the bound allows: the bound is reached
-    assert 0.0 < tf <= LAG_SHARE_DEFAULT * tu * (1.0 + 1e-3), f"Tf = {tf:.3g} s, L = {tu:.3g} s"
+    lag_share = _default(harness, "fTuneFilterLagShare")
+    assert 0.0 < tf <= lag_share * tu * (1.0 + 1e-3), f"Tf = {tf:.3g} s, L = {tu:.3g} s"
     # Ms includes the filter lag and the published set stays clear of a fragile loop
     assert 1.0 < ms <= MS_FRAGILE, f"Ms = {ms:.3g}"
 
 
-def test_the_noise_limits_the_gain(noisy):
+def test_the_noise_limits_the_gain(noisy, harness):
     """AUTO's SIMC Kp on the identified model, Tg / (Ks (tau_c + Tu)) with tau_c = Tu, would let the noise
     drive the P part by more than fTuneNoiseKpOutput: the tuned Kp is the limit's, below it."""
     v = noisy["tune"].values
     simc_kp = v["identified_tg_s"] / (v["identified_ks_c_per_pct"] * 2.0 * v["identified_tu_s"])
     kp, noise_pp = v["tuned_kp_pct_per_c"], v["identified_noise_pp_c"]
+    limit = _default(harness, "fTuneNoiseKpOutput")
     assert kp < simc_kp, f"Kp {kp:.3g} not below SIMC's {simc_kp:.3g}"
-    assert kp * noise_pp > KP_NOISE_DEFAULT, "the unfiltered noise alone would not need the limit"
+    assert kp * noise_pp > limit, "the unfiltered noise alone would not need the limit"
     # the limit holds after the filter, which passes at least FILTER_PASS_MIN of the noise (held below 0.1 L)
-    assert kp * noise_pp <= KP_NOISE_DEFAULT / FILTER_PASS_MIN, f"Kp {kp:.3g} at {noise_pp:.3g} degC p-p"
+    assert kp * noise_pp <= limit / FILTER_PASS_MIN, f"Kp {kp:.3g} at {noise_pp:.3g} degC p-p"
 
 
 def test_no_offset(noisy):

@@ -206,3 +206,46 @@ def test_the_reference_path_has_no_step(t_scale: float, l_scale: float) -> None:
     max_move = K * 100.0 / (T * 0.7) * TS
     steps = [abs(b[2] - a[2]) for a, b in zip(after, after[1:], strict=False)]
     assert max(steps) <= max_move, f"path step {max(steps):.3f} degC in one scan"
+
+
+MANUAL = 4
+MOVING_SEEN_TOLERANCE = 0.10  # the plant's L and T as the limit phase saw it, against the true plant
+MOVING_OVERSHOOT_PCT = 5.0  # of the step; a plant at rest is held to 0.5 %, one still moving carries more
+
+
+@pytest.mark.parametrize(
+    ("pre_s", "y_pre", "w"),
+    [(40.0, 60.0, 175.0), (85.0, 60.0, 175.0), (20.0, 30.0, W1), (40.0, 30.0, W1)],
+    ids=["cool-40s-into-a-rise", "cool-85s-into-a-rise", "heat-20s-into-a-rise", "heat-40s-into-a-rise"],
+)
+def test_a_response_started_on_a_moving_plant_sees_the_plant(pre_s: float, y_pre: float, w: float) -> None:
+    """TUNE hands over with the hot end still rising, so a response may start on a plant that moves on its
+    own. That motion goes on for a dead time; taken off X, the limit phase sees the plant's L and T within
+    10 % and the response stays within 5 % of the step (before: L seen 0.3-5.7 s for 10.6 s, 15-37 %)."""
+    drv = controller(heat_up=True)
+    plant = Fopdt(k=K, t=T, l=L, x0=W0, dt=TS, noise=0.03)
+    drv.set("fbUut.fYManual", y_pre)
+    drv.set("fbUut.fW1", w)
+    drv.set("nMode", MANUAL)
+    seen, xs, limit_before = None, [], False
+    for n in range(round((pre_s + HORIZON) / TS)):
+        if n == round(pre_s / TS):
+            drv.set("nMode", ACTIVE)
+        drv.set("fbUut.fX", plant.measure())
+        drv.set("fbUut.nPvSequence", n + 1)
+        drv.scan()
+        plant.step(drv.get("fbUut.fY"))
+        limit = drv.get("fbUut.fbHeatUp.bLimitPhase")
+        if limit_before and not limit:
+            seen = (drv.get("fbUut.fbHeatUp.fTuSeen"), drv.get("fbUut.fbHeatUp.fTgSeen"))
+        limit_before = limit
+        if n >= round(pre_s / TS):
+            xs.append(plant.x)
+    assert drv.get("nState") == ACTIVE
+    assert seen is not None, "no response ran"
+    assert seen[0] == pytest.approx(L, rel=MOVING_SEEN_TOLERANCE), f"dead time seen {seen[0]:.2f} s"
+    assert seen[1] == pytest.approx(T, rel=MOVING_SEEN_TOLERANCE), f"time constant seen {seen[1]:.2f} s"
+    step = abs(w - xs[0])
+    beyond = max((x - w) * math.copysign(1.0, w - xs[0]) for x in xs)
+    assert 100.0 * beyond / step <= MOVING_OVERSHOOT_PCT, f"{100.0 * beyond / step:.1f} % past W"
+    assert abs(xs[-1] - w) <= BAND * step

@@ -249,3 +249,26 @@ def test_a_response_started_on_a_moving_plant_sees_the_plant(pre_s: float, y_pre
     beyond = max((x - w) * math.copysign(1.0, w - xs[0]) for x in xs)
     assert 100.0 * beyond / step <= MOVING_OVERSHOOT_PCT, f"{100.0 * beyond / step:.1f} % past W"
     assert abs(xs[-1] - w) <= BAND * step
+
+
+def test_a_holding_power_at_the_limit_starts_no_response() -> None:
+    """Down to 0.5 degC above the plant's ambient the holding power is 0.8 %, next to the 0 % limit: the
+    model's limit phase would last 4.2 T and its switch would wait on a rise that hardly moves. The PID
+    takes it (no response, no held integrator); the response still runs for a target 5 degC higher."""
+    for w, expected in ((W0 + 0.5, False), (W0 + 5.0, True)):
+        drv = controller(heat_up=True)
+        plant = Fopdt(k=K, t=T, l=L, x0=W0, dt=TS, noise=0.03)
+        drv.set("fbUut.fYManual", 60.0)
+        drv.set("fbUut.fW1", w)
+        drv.set("nMode", MANUAL)
+        started = False
+        for n in range(round(400.0 / TS)):
+            if n == round(200.0 / TS):
+                drv.set("nMode", ACTIVE)
+            drv.set("fbUut.fX", plant.measure())
+            drv.set("fbUut.nPvSequence", n + 1)
+            drv.scan()
+            plant.step(drv.get("fbUut.fY"))
+            started = started or drv.get("fbUut.fbHeatUp.bActive")
+        assert started is expected, f"W {w}: response {'ran' if started else 'did not run'}"
+        assert drv.get("nState") == ACTIVE

@@ -264,6 +264,8 @@ class ZoneSequencer:
             self.sensor.fault = str(value)
         elif kind == "model_mismatch" and self.plant is not None:
             self.plant.time_constant_scale = float(value)  # type: ignore[attr-defined, arg-type]
+        elif kind == "dead_time_mismatch" and self.plant is not None:
+            self.plant.set_dead_time(self.plant.dead_time_s * float(value))  # type: ignore[attr-defined, arg-type]
 
 
 async def _pwm_step(

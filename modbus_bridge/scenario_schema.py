@@ -150,6 +150,7 @@ DISTURBANCE_MODELS = (
     _disturbance("heater_fail", doc="the heater cartridge fails open"),
     _disturbance("sensor_fault", "fault", Literal[SENSOR_FAULTS], "sensor open / short / healed"),
     _disturbance("model_mismatch", "time_constant_scale", Positive, "plant time constants times this"),
+    _disturbance("dead_time_mismatch", "dead_time_scale", Positive, "plant dead time times this"),
 )
 DISTURBANCE_FIELDS: dict[str, tuple[str, ...]] = {
     typing.get_args(m.model_fields["kind"].annotation)[0]: tuple(

@@ -213,6 +213,40 @@ MOVING_SEEN_TOLERANCE = 0.10  # the plant's L and T as the limit phase saw it, a
 MOVING_OVERSHOOT_PCT = 5.0  # of the step; a plant at rest is held to 0.5 %, one still moving carries more
 
 
+@dataclass
+class HandOver:
+    seen: tuple[float, float] | None  # L, T the limit phase saw, when one ended
+    xs: list[float]  # plant temperature from the hand-over on
+    started: bool  # a response ran
+    state: int  # controller state at the end
+
+
+def hand_over(pre_s: float, y_pre: float, w: float, after_s: float = HORIZON) -> HandOver:
+    """MANUAL at y_pre for pre_s (a plant still moving when TUNE hands over), then ACTIVE towards w."""
+    drv = controller(heat_up=True)
+    plant = Fopdt(k=K, t=T, l=L, x0=W0, dt=TS, noise=0.03)
+    drv.set("fbUut.fYManual", y_pre)
+    drv.set("fbUut.fW1", w)
+    drv.set("nMode", MANUAL)
+    out, limit_before = HandOver(None, [], False, 0), False
+    for n in range(round((pre_s + after_s) / TS)):
+        if n == round(pre_s / TS):
+            drv.set("nMode", ACTIVE)
+        drv.set("fbUut.fX", plant.measure())
+        drv.set("fbUut.nPvSequence", n + 1)
+        drv.scan()
+        plant.step(drv.get("fbUut.fY"))
+        out.started = out.started or drv.get("fbUut.fbHeatUp.bActive")
+        limit = drv.get("fbUut.fbHeatUp.bLimitPhase")
+        if limit_before and not limit:
+            out.seen = (drv.get("fbUut.fbHeatUp.fTuSeen"), drv.get("fbUut.fbHeatUp.fTgSeen"))
+        limit_before = limit
+        if n >= round(pre_s / TS):
+            out.xs.append(plant.x)
+    out.state = drv.get("nState")
+    return out
+
+
 @pytest.mark.parametrize(
     ("pre_s", "y_pre", "w"),
     [(40.0, 60.0, 175.0), (85.0, 60.0, 175.0), (20.0, 30.0, W1), (40.0, 30.0, W1)],
@@ -222,26 +256,9 @@ def test_a_response_started_on_a_moving_plant_sees_the_plant(pre_s: float, y_pre
     """TUNE hands over with the hot end still rising, so a response may start on a plant that moves on its
     own. That motion goes on for a dead time; taken off X, the limit phase sees the plant's L and T within
     10 % and the response stays within 5 % of the step (before: L seen 0.3-5.7 s for 10.6 s, 15-37 %)."""
-    drv = controller(heat_up=True)
-    plant = Fopdt(k=K, t=T, l=L, x0=W0, dt=TS, noise=0.03)
-    drv.set("fbUut.fYManual", y_pre)
-    drv.set("fbUut.fW1", w)
-    drv.set("nMode", MANUAL)
-    seen, xs, limit_before = None, [], False
-    for n in range(round((pre_s + HORIZON) / TS)):
-        if n == round(pre_s / TS):
-            drv.set("nMode", ACTIVE)
-        drv.set("fbUut.fX", plant.measure())
-        drv.set("fbUut.nPvSequence", n + 1)
-        drv.scan()
-        plant.step(drv.get("fbUut.fY"))
-        limit = drv.get("fbUut.fbHeatUp.bLimitPhase")
-        if limit_before and not limit:
-            seen = (drv.get("fbUut.fbHeatUp.fTuSeen"), drv.get("fbUut.fbHeatUp.fTgSeen"))
-        limit_before = limit
-        if n >= round(pre_s / TS):
-            xs.append(plant.x)
-    assert drv.get("nState") == ACTIVE
+    run = hand_over(pre_s, y_pre, w)
+    seen, xs = run.seen, run.xs
+    assert run.state == ACTIVE
     assert seen is not None, "no response ran"
     assert seen[0] == pytest.approx(L, rel=MOVING_SEEN_TOLERANCE), f"dead time seen {seen[0]:.2f} s"
     assert seen[1] == pytest.approx(T, rel=MOVING_SEEN_TOLERANCE), f"time constant seen {seen[1]:.2f} s"
@@ -256,19 +273,6 @@ def test_a_holding_power_at_the_limit_starts_no_response() -> None:
     model's limit phase would last 4.2 T and its switch would wait on a rise that hardly moves. The PID
     takes it (no response, no held integrator); the response still runs for a target 5 degC higher."""
     for w, expected in ((W0 + 0.5, False), (W0 + 5.0, True)):
-        drv = controller(heat_up=True)
-        plant = Fopdt(k=K, t=T, l=L, x0=W0, dt=TS, noise=0.03)
-        drv.set("fbUut.fYManual", 60.0)
-        drv.set("fbUut.fW1", w)
-        drv.set("nMode", MANUAL)
-        started = False
-        for n in range(round(400.0 / TS)):
-            if n == round(200.0 / TS):
-                drv.set("nMode", ACTIVE)
-            drv.set("fbUut.fX", plant.measure())
-            drv.set("fbUut.nPvSequence", n + 1)
-            drv.scan()
-            plant.step(drv.get("fbUut.fY"))
-            started = started or drv.get("fbUut.fbHeatUp.bActive")
-        assert started is expected, f"W {w}: response {'ran' if started else 'did not run'}"
-        assert drv.get("nState") == ACTIVE
+        run = hand_over(200.0, 60.0, w, after_s=200.0)
+        assert run.started is expected, f"W {w}: response {'ran' if run.started else 'did not run'}"
+        assert run.state == ACTIVE

@@ -9,10 +9,11 @@ the PID alone, and no output kick."""
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import pytest
 
-from modbus_bridge.scenario import Disturbance, load_scenario, resolve_scenario
+from modbus_bridge.scenario import Disturbance, Scenario, load_scenario, resolve_scenario
 from tests.test_lib_heatup import bound_s
 
 from .conftest import run_scenario
@@ -24,15 +25,21 @@ MISMATCH_RATIO, MISMATCH_OVERSHOOT_PCT = 1.5, 2.0
 ROBUST_MS = 1.6
 
 
+@functools.cache
+def _scenario() -> Scenario:
+    """The scenario as shipped, read once (the runs below replace parts of it, never change it)."""
+    return load_scenario(resolve_scenario(SCENARIO))
+
+
 def _bound_s(time_constant_scale: float) -> float:
     """The bang-hold bound of the scenario's true plant (same step 160 -> 200 degC and 0.1 s step)."""
-    p = load_scenario(resolve_scenario(SCENARIO)).plant_params
+    p = _scenario().plant_params
     return bound_s(k=p["gain_c_per_pct"], t=p["time_constant_s"] * time_constant_scale, l=p["dead_time_s"])
 
 
 def _run(harness, time_constant_scale: float = 1.0,
          variants: tuple[str, ...] = (MODEL_BASED, PID_ONLY)) -> dict:
-    sc = load_scenario(resolve_scenario(SCENARIO))
+    sc = _scenario()
     zone = sc.zones[0]
     if time_constant_scale != 1.0:  # the plant changes once tuned, before the hand-over to ACTIVE
         phases = list(zone.phases)
@@ -62,7 +69,7 @@ def test_auto_tunes_a_robust_feedback_part(nominal):
 def _overshoot_within(values: dict, tune: dict, goal_pct: float, phase: str = "step") -> None:
     """The goal holds for the true temperature; the PV's peak may add the noise the tuner measured at rest
     (a 12-bit NTC reads 0.12 degC per count: one count is 0.3 % of this step)."""
-    phases = {p.name: p for p in load_scenario(resolve_scenario(SCENARIO)).zones[0].phases}
+    phases = {p.name: p for p in _scenario().zones[0].phases}
     before = {"step": "return", "return": "tune"}[phase]
     step_c = abs(phases[phase].setpoint_c - phases[before].setpoint_c)
     noise_pct = 100.0 * tune["identified_noise_pp_c"] / step_c
@@ -88,7 +95,7 @@ SEEN_TOLERANCE = 0.15  # the plant as the limit phase saw it, against the true p
 
 
 def _plant_seen(step: dict, time_constant_scale: float) -> None:
-    p = load_scenario(resolve_scenario(SCENARIO)).plant_params
+    p = _scenario().plant_params
     true_tu, true_tg = p["dead_time_s"], p["time_constant_s"] * time_constant_scale
     tu, tg = step["heatup_tu_seen_s"], step["heatup_tg_seen_s"]
     assert tu == pytest.approx(true_tu, rel=SEEN_TOLERANCE), f"dead time seen {tu:.2f} s, plant {true_tu} s"

@@ -6,6 +6,7 @@ dead-time plant integrated here in Python (TCLab-like: K = 0.66 degC/%, T = 149 
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from collections import deque
@@ -23,6 +24,10 @@ PLANT_K, PLANT_T, PLANT_L = 0.66, 149.0, 15.0
 AMBIENT = 21.0
 BASE = {"fKp": 14.3, "fTn": 36.0, "fTv": 6.3, "fTd": 1.6}  # CHR disturbance 0 % for the plant above
 OUTPUT_RANGE = 100.0  # %
+SETPOINT = 60.0
+LOAD_STEP = -15.0  # % of heater power (e.g. a fan), from the middle of the closed-loop run
+BUMP_LIMIT = 0.005 * OUTPUT_RANGE  # largest output step a gain change may cause in the closed loop
+MAX_OUTPUT_STEP = 0.1  # %, ST_FuzzyParameter.fMaxOutputStep default: the adapter's own |dKp * e| limit
 
 DECLS = """    sCtrl : ST_ControllerParameter;
     sFz : ST_FuzzyParameter;
@@ -321,7 +326,7 @@ def run_loop(enable: bool, seconds: float = 1500.0, query: bool = False) -> Loop
     for k in range(int(seconds / CYCLE)):
         t = k * CYCLE
         drv.set("fX", x)
-        drv.set("fW", 60.0)
+        drv.set("fW", SETPOINT)
         drv.scan()
         assert drv.get("bScalingOk")
         y = drv.get("fY")
@@ -335,7 +340,7 @@ def run_loop(enable: bool, seconds: float = 1500.0, query: bool = False) -> Loop
         log.pid.append(
             (drv.get("fbPid.fP"), drv.get("fbPid.fI"), drv.get("fbPid.fD"), drv.get("fbPid.bARWActive"))
         )
-        disturbance = -15.0 if t >= seconds / 2 else 0.0  # load step (e.g. a fan) in % of heater power
+        disturbance = LOAD_STEP if t >= seconds / 2 else 0.0
         delay.append(y + disturbance)
         u = delay.popleft()
         x += CYCLE * (PLANT_K * u - (x - AMBIENT)) / PLANT_T
@@ -352,7 +357,7 @@ def gain_caused_steps(log: LoopLog) -> np.ndarray:
         kp0, tn0, tv0, td0 = log.gains[k - 1]
         if log.gains[k] == log.gains[k - 1]:
             continue
-        e = 60.0 - log.x[k]
+        e = SETPOINT - log.x[k]
         p_old = kp0 * e
         i_old = log.pid[k - 1][1] + kp0 * CYCLE / tn0 * e
         d_old = td0 / (td0 + CYCLE) * log.pid[k - 1][2] - kp0 * tv0 / (td0 + CYCLE) * (
@@ -363,13 +368,25 @@ def gain_caused_steps(log: LoopLog) -> np.ndarray:
     return np.array(out)
 
 
-@pytest.fixture(scope="module")
-def loops() -> dict[str, LoopLog]:
+def kp_change_steps(log: LoopLog) -> np.ndarray:
+    """|dKp * e| per cycle: the output step the adapter's own limit (fMaxOutputStep) bounds."""
+    gains = np.array(log.gains)
+    return np.abs(np.diff(gains[:, 0])) * np.abs(np.array(log.e[1:]))
+
+
+@functools.cache
+def closed_loops() -> dict[str, LoopLog]:
+    """The fixed-PID and the fuzzy run, once per process (docs/fuzzy.md shows their figures)."""
     return {"fixed": run_loop(False), "fuzzy": run_loop(True)}
 
 
+@pytest.fixture(scope="module")
+def loops() -> dict[str, LoopLog]:
+    return closed_loops()
+
+
 def iae(log: LoopLog) -> float:
-    return float(np.sum(np.abs(60.0 - np.array(log.x))) * CYCLE)
+    return float(np.sum(np.abs(SETPOINT - np.array(log.x))) * CYCLE)
 
 
 def test_closed_loop_gains_move_within_bounds(loops: dict[str, LoopLog]) -> None:
@@ -393,11 +410,10 @@ def test_closed_loop_gain_changes_are_bumpless(loops: dict[str, LoopLog]) -> Non
     log = loops["fuzzy"]
     steps = gain_caused_steps(log)
     assert len(steps) > 100
-    assert steps.max() <= 0.005 * OUTPUT_RANGE
+    assert steps.max() <= BUMP_LIMIT
     # the adapter's own guarantee, independent of the PID's integrator compensation
-    gains = np.array(log.gains)
-    dkp = np.abs(np.diff(gains[:, 0])) * np.abs(np.array(log.e[1:]))
-    assert dkp.max() <= 0.1 + 1e-3
+    dkp = kp_change_steps(log)
+    assert dkp.max() <= MAX_OUTPUT_STEP + 1e-3
     print(f"largest output step caused by a gain change: {steps.max():.4f} % (|dKp*e| max {dkp.max():.4f} %)")
 
 

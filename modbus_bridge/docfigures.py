@@ -19,6 +19,7 @@ import functools
 import json
 import os
 import re
+import sys
 from collections.abc import Callable
 from pathlib import Path
 
@@ -39,6 +40,13 @@ def producer(name: str, *, measured: bool = False):
         return fn
 
     return register
+
+
+def tests_on_path() -> None:
+    """Producers that show what a test computes import it from tests/; `thermost docs` (a console
+    script) does not put the checkout on sys.path."""
+    if str(ROOT) not in sys.path:
+        sys.path.insert(0, str(ROOT))
 
 
 # ---- producers ----------------------------------------------------------------------------------
@@ -71,7 +79,8 @@ def seed003_results() -> str:
             f"(plant {p['gain_c_per_pct']:g}), "
             f"Tu {v['identified_tu_s']:.1f} s ({p['dead_time_s']:g}), Tg {v['identified_tg_s']:.1f} s "
             f"({p['time_constant_s']:g}) in {v['tuning_duration_s']:.0f} s; gains Kp "
-            f"{v['tuned_kp_pct_per_c']:.2f} %/°C, Tn {v['tuned_tn_s']:.1f} s, Tv {v['tuned_tv_s']:.2f} s."
+            f"{v['tuned_kp_pct_per_c']:.2f} %/°C, Tn {v['tuned_tn_s']:.1f} s, Tv {v['tuned_tv_s']:.2f} s"
+            + (f", Ms {v['tuned_ms']:.1f} on the identified model." if "tuned_ms" in v else ".")
         )
     for result, pms in runs:
         step, load = _phase(pms, "step"), _phase(pms, "load")
@@ -230,4 +239,4 @@ def main_docs(args: argparse.Namespace) -> int:
     return 1 if stale and args.check else 0
 
 
-from . import docfigures_fuzzy  # noqa: E402, F401 - registers the producers of docs/fuzzy.md
+from . import docfigures_fuzzy, docfigures_library  # noqa: E402, F401 - register their pages' producers

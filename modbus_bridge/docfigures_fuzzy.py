@@ -8,19 +8,12 @@ The scan cost is measured (`measured=True`): `make docs` rewrites it, the test o
 from __future__ import annotations
 
 import re
-import sys
 
 import numpy as np
 
-from .docfigures import ROOT, _phase, adapter_cost_rows, default_run, producer
+from .docfigures import ROOT, _phase, adapter_cost_rows, default_run, producer, tests_on_path
 
 SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
-
-
-def _tests_on_path() -> None:
-    """`thermost docs` (a console script) does not put the checkout on sys.path; the tests live there."""
-    if str(ROOT) not in sys.path:
-        sys.path.insert(0, str(ROOT))
 
 
 def _oracle_available() -> None:
@@ -91,7 +84,7 @@ def fuzzy_universe() -> str:
 @producer("fuzzy-oracle")
 def fuzzy_oracle() -> str:
     """ST inference vs the independent oracle (tests/test_fuzzy_inference.py, tests/test_fuzzy_oracle.py)."""
-    _tests_on_path()
+    tests_on_path()
     _oracle_available()
     from tests.test_fuzzy_inference import CONFIGS, TOLERANCE, grid, oracle_deviation
     from tests.test_fuzzy_oracle import GAUSS_HALF_CROSSING, discretisation_error
@@ -124,7 +117,7 @@ def fuzzy_oracle() -> str:
 @producer("fuzzy-closed-loop")
 def fuzzy_closed_loop() -> str:
     """The closed loop of tests/test_fuzzy_adapter.py: FB_CtrlPid + FOPDT, fixed set vs adapter."""
-    _tests_on_path()
+    tests_on_path()
     from tests import test_fuzzy_adapter as t
 
     loops = t.closed_loops()
@@ -154,7 +147,7 @@ def fuzzy_closed_loop() -> str:
 @producer("fuzzy-seed003")
 def fuzzy_seed003() -> str:
     """Seed 003's example point and table 2 against the library (tests/test_fuzzy_seed003.py)."""
-    _tests_on_path()
+    tests_on_path()
     from tests import test_fuzzy_seed003 as t
 
     got = t.example_point()

@@ -8,9 +8,11 @@ state their figures (SHORTFALLS), so an improvement shows.
 
 from __future__ import annotations
 
+import functools
+
 import pytest
 
-from plc.tuning_study import IAE_RATIO_GOAL, MS_GOAL, PLANTS, study, table
+from plc.tuning_study import IAE_RATIO_GOAL, MS_GOAL, PLANTS, StudyPlant, StudyRow, study, table
 
 ROBUST_MS = 2.0
 SHORTFALLS = {
@@ -30,9 +32,15 @@ def _cases():
         yield pytest.param(plant, marks=marks, id=plant.label.replace(" ", "_"))
 
 
+@functools.cache
+def study_row(plant: StudyPlant) -> StudyRow:
+    """One study per plant and process (docs/library.md shows the shortfalls' rows)."""
+    return study(plant)
+
+
 @pytest.mark.parametrize("plant", list(_cases()))
 def test_auto_tuning_is_robust_and_rejects_loads_like_the_best_rule(plant) -> None:
-    row = study(plant)
+    row = study_row(plant)
     print("\n".join(table([row])))
     assert row.rule == ("SIMC" if row.tau < LAG_DOMINATED_TAU else "AMIGO")
     assert row.ms <= ROBUST_MS, f"{plant.label}: Ms {row.ms:.2f} on the true plant"

@@ -49,6 +49,7 @@ TUNE_KEYS = {
     "t_filter": "tuned_filter_s",
     "ms": "tuned_ms",
     "noise_pp": "identified_noise_pp_c",
+    "order": "identified_order",
 }
 # the fuzzy adapter's Ms bound at the end of a phase it ran in (fz_ms_reachable 0: no bound in use, left out)
 ADAPTER_KEYS = {

@@ -59,6 +59,8 @@ ROLE_PATTERNS: dict[str, tuple[str, ...]] = {
     "ms": (r"fMsTunedZone{n}",),
     # sensor noise peak-to-peak TUNE measured at rest (it sizes t_filter from it)
     "noise_pp": (r"fTuneNoisePpZone{n}",),
+    # order of the model TUNE identified: 1 FOPDT, n >= 2 n equal lags
+    "order": (r"nTuneOrderZone{n}",),
     # the fuzzy adapter's Ms bound: the limit, the worst Ms over the gain sets it can reach, the scale of
     # the base gains and the share of the configured ratio box it kept for that
     "fz_ms_max": (r"fFuzzyMsMaxZone{n}",),

@@ -34,6 +34,7 @@ SUMMARY_KEYS = (
     "tuned_tn_cool_s",
     "tuned_tv_cool_s",
     "identified_noise_pp_c",
+    "identified_order",
     "tuned_filter_s",
     "tuned_ms",
     "fuzzy_ms_reachable",

@@ -179,6 +179,41 @@ def test_fopdt_identified_within_10_percent_and_auto_rule(uut, k, t, l, w, dy, e
           f"Ms {got['fMsTuned']:.2f} on the identified model")
 
 
+@dataclass
+class EqualLags:
+    """K / (T s + 1)^n, the n-lag plant of the scenarios (exact discretisation), noise-free."""
+
+    k: float
+    t: float
+    n: int
+    x0: float = 20.0
+
+    def __post_init__(self) -> None:
+        from modbus_bridge.plants.base import PlantDisturbance
+        from modbus_bridge.plants.lti import NLag
+
+        self.plant = NLag(gain_c_per_pct=self.k, time_constant_s=self.t, order=float(self.n),
+                          ambient_c=self.x0)
+        self.dist = PlantDisturbance.for_channels(1)
+
+    def measure(self) -> float:
+        return self.plant.temperatures()[0]
+
+    def step(self, u: float) -> None:
+        self.plant.step([u], TS, self.dist)
+
+
+@pytest.mark.parametrize(("plant", "order"),
+                         [(Fopdt(k=2.0, t=23.4, l=10.6), 1), (EqualLags(2.0, 20.0, 3), 3)],
+                         ids=["FOPDT", "3 lags"])
+def test_tune_publishes_the_order_of_its_model(uut, plant, order) -> None:
+    """The model-based setpoint response plans on n equal lags when the n-lag fit found them: TUNE
+    publishes the order with the two-point FOPDT it hands to the rules."""
+    run_tune(uut, plant, w=80.0, y_tune=50.0)
+    assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
+    assert uut.get("sPar.nTuneOrder") == order
+
+
 @pytest.mark.parametrize("rule", [RULE_CHR, RULE_COHEN_COON, RULE_SIMC, RULE_AMIGO])
 def test_selected_rule_produces_documented_values(uut, rule) -> None:
     plant = Fopdt(k=1.5, t=60.0, l=12.0)

@@ -286,6 +286,9 @@ def tuning_page(zone: int = 1) -> None:
         rule = p.value(z["tune_rule_used"]) if z.has("tune_rule_used") else None
         rule_text = p.model.tune_rules.get(int(rule), str(rule)) if rule is not None else "-"
         quality = ""
+        order = p.value(z["tune_order"]) if z.has("tune_order") else None
+        if order:
+            quality += "; model: first order" if int(order) == 1 else f"; model: {int(order)} equal lags"
         if z.has("fit_rms") and p.value(z["fit_rms"]):
             quality += f"; fit rms {value_text(z['fit_rms'])} of the rise"
         if z.has("ms_tuned") and p.value(z["ms_tuned"]):

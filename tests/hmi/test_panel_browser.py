@@ -228,6 +228,9 @@ def test_tuning_reject_restores_and_accept_keeps(stack: Stack, pg) -> None:
     expect()(ident).not_to_contain_text(re.compile(r"K = 0 degC"))  # seed 003: K 0.59 degC/%
     assert "rule used: AUTO" not in ident.inner_text()  # the rule AUTO picked
     expect()(ident).to_contain_text(re.compile(r"fit rms \S+ % of the rise; Ms of the set \d"))
+    # the order of the model TUNE identified (seed 003's hot end is a first-order lag with delay)
+    assert stack.read("nTuneOrderZone1")["nTuneOrderZone1"] == 1
+    expect()(ident).to_contain_text("; model: first order; fit rms")
     # what TUNE measured at rest and the filter it sized from it, as the PLC reports them
     got = stack.read("fTuneNoisePpZone1", "fTFilterTunedZone1", "fTFilterUsedZone1")
     assert got["fTuneNoisePpZone1"] > 0.0

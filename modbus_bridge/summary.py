@@ -26,9 +26,9 @@ TUNED_KEYS = (  # metric key -> label with unit
     ("tuned_tn_s", "Tn (s)"),
     ("tuned_tv_s", "Tv (s)"),
     ("identified_noise_pp_c", "noise p-p (°C)"),
-    ("identified_order", "model order"),
     ("tuned_filter_s", "filter (s)"),
     ("tuned_ms", "Ms"),
+    ("identified_order", "model order"),
 )
 # the fuzzy adapter's Ms bound per variant and phase (analysis.ADAPTER_KEYS) -> label
 ADAPTER_COLUMNS = (

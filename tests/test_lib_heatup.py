@@ -211,7 +211,8 @@ def test_the_reference_path_has_no_step(t_scale: float, l_scale: float) -> None:
     assert max(steps) <= max_move, f"path step {max(steps):.3f} degC in one scan"
 
 
-MANUAL = 4
+MANUAL, TUNE = 4, 5
+TUNE_READY = 4
 MOVING_SEEN_TOLERANCE = 0.10  # the plant's L and T as the limit phase saw it, against the true plant
 MOVING_OVERSHOOT_PCT = 5.0  # of the step; a plant at rest is held to 0.5 %, one still moving carries more
 
@@ -365,3 +366,69 @@ def test_an_oven_with_another_delay_stays_within_the_mismatch_goals(l_scale: flo
     print(f"oven, delay x{l_scale}: {res.settling_s:.1f} s, {res.overshoot_pct:.2f} %")
     assert res.overshoot_pct <= 2.0
     assert res.settling_s <= 1.5 * oven_bound()
+
+
+@dataclass
+class TuneHandOver:
+    order: int
+    peak_c: float
+    low_after_peak_c: float
+    unavoidable_peak_c: float  # the true oven's peak with the output at 0 % from the hand-over on
+
+
+def oven_tune_hand_over(heat_up: bool, after_s: float = 900.0) -> TuneHandOver:
+    """TUNE the oven from ambient towards 100 degC (60 % step, AUTO), then ACTIVE at once."""
+    drv = controller(heat_up=heat_up, model=(0.0, 0.0, 0.0))
+    for name, value in dict(fTaskCycleTime=OVEN_TS, fCtrlCycleTime=OVEN_TS, fYTune=60.0, fTuneTimeout=3000.0,
+                            **OVEN_SUPERVISION).items():
+        drv.set(f"sPar.{name}", value)
+    drv.set("nRule", 0)
+    plant = NLag(gain_c_per_pct=OVEN_K, time_constant_s=OVEN_T, order=float(OVEN_N), dead_time_s=OVEN_L,
+                 ambient_c=OVEN_AMBIENT)
+    dist = PlantDisturbance.for_channels(1)
+    rng = np.random.default_rng(5)
+    drv.set("fbUut.fW1", OVEN_W0)
+    drv.set("nMode", TUNE)
+    xs: list[float] = []
+    n = 0
+    while n < round((3000.0 + after_s) / OVEN_TS) and len(xs) < round(after_s / OVEN_TS):
+        drv.set("fbUut.fX", plant.temperatures()[0] + rng.normal(0.0, 0.03))
+        drv.set("fbUut.nPvSequence", n + 1)
+        drv.scan()
+        if drv.get("nMode") == TUNE and drv.get("nTuneState") == TUNE_READY:
+            drv.set("nMode", ACTIVE)
+            age, x0 = drv.get("fbUut.fbTuner.fStepAge"), drv.get("fbUut.fbTuner.fX0")
+        plant.step([drv.get("fbUut.fY")], OVEN_TS, dist)
+        if drv.get("nMode") == ACTIVE:
+            # the scan that ended TUNE still reports TUNED; ACTIVE from the next on
+            assert not xs or drv.get("nState") == ACTIVE, f"state {drv.get('nState')} at {n * OVEN_TS:.1f} s"
+            xs.append(plant.temperatures()[0])
+        n += 1
+    assert xs, "TUNE did not end"
+    # the true oven's response to the tune step cut to 0 % at the hand-over: the least peak any output gives
+    t = np.arange(0.0, 2000.0, OVEN_TS)
+
+    def g(x: np.ndarray) -> np.ndarray:
+        x = np.clip(x, 0.0, None)
+        return 1.0 - np.exp(-x) * sum(x**k / math.factorial(k) for k in range(OVEN_N))
+
+    cut = x0 + OVEN_K * 60.0 * (g((t + age - OVEN_L) / OVEN_T) - g((t - OVEN_L) / OVEN_T))
+    top = int(np.argmax(xs))
+    return TuneHandOver(drv.get("sPar.nTuneOrder"), max(xs), min(xs[top:]), float(cut.max()))
+
+
+def test_a_tune_hand_over_on_the_oven_brakes_the_heat_its_lags_hold() -> None:
+    """TUNE's step ends at 80 % of the way to W, and the oven's four lags still hold the heat of 60 %: even
+    0 % from then on leaves it well past W. With the heat-up the hand-over plans on the identified lags and
+    the step's known history (0 % for a while, then the holding power): its peak stays near that least peak
+    and it comes back to W without undershoot; the PID alone, bumpless from the step's 60 %, goes far
+    higher."""
+    planned, plain = oven_tune_hand_over(heat_up=True), oven_tune_hand_over(heat_up=False)
+    least = planned.unavoidable_peak_c - OVEN_W0
+    print(f"oven TUNE -> 100 degC: least peak {planned.unavoidable_peak_c:.1f} degC; planned "
+          f"{planned.peak_c:.1f} degC, then down to {planned.low_after_peak_c:.2f}; "
+          f"PID alone {plain.peak_c:.1f}")
+    assert planned.order == OVEN_N
+    assert planned.peak_c - OVEN_W0 <= 1.25 * least
+    assert planned.low_after_peak_c >= OVEN_W0 - BAND * (OVEN_W0 - OVEN_AMBIENT)
+    assert plain.peak_c - OVEN_W0 >= 1.5 * least

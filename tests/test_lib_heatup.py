@@ -287,32 +287,44 @@ OVEN_K, OVEN_T, OVEN_N, OVEN_L = 2.2, 45.0, 4, 4.0
 OVEN_AMBIENT, OVEN_W0, OVEN_W1 = 25.0, 100.0, 150.0
 OVEN_TS, OVEN_REST_S, OVEN_HORIZON_S = 0.2, 2000.0, 1200.0
 OVEN_SUPERVISION = dict(fWatchPeriod=240.0, fRunawayPeriod=300.0)  # the scenario's, as for a slow bed
+OVEN_Y_TUNE = 60.0  # TUNE's step, %
+
+
+def oven_unit_step(x):
+    """The unit step response of the oven's four equal lags at x = (t - L) / T (0 before the delay)."""
+    x = np.clip(x, 0.0, None)
+    return 1.0 - np.exp(-x) * sum(x**k / math.factorial(k) for k in range(OVEN_N))
 
 
 def oven_two_point() -> tuple[float, float]:
     """(Tu, Tg) of the two-point FOPDT (seed 003, Smith) of the oven's step response: what TUNE reports."""
     from scipy.optimize import brentq
 
-    def g(x: float) -> float:
-        return 1.0 - math.exp(-x) * sum(x**k / math.factorial(k) for k in range(OVEN_N))
-
-    x28, x63 = (brentq(lambda x, lv=level: g(x) - lv, 0.0, 10.0 * OVEN_N) for level in (0.283, 0.632))
+    x28, x63 = (brentq(lambda x, lv=level: float(oven_unit_step(x)) - lv, 0.0, 10.0 * OVEN_N)
+                for level in (0.283, 0.632))
     tg = 1.5 * (x63 - x28) * OVEN_T
     return OVEN_L + x63 * OVEN_T - tg, tg
+
+
+def oven_loop(heat_up: bool, model: tuple[float, float, float], l_scale: float = 1.0,
+              initial_c: float | None = None) -> tuple[ScanDriver, NLag, PlantDisturbance]:
+    """The controller on the oven's cycle and supervision times, and the oven (delay times l_scale)."""
+    drv = controller(heat_up=heat_up, model=model)
+    for name, value in dict(fTaskCycleTime=OVEN_TS, fCtrlCycleTime=OVEN_TS, **OVEN_SUPERVISION).items():
+        drv.set(f"sPar.{name}", value)
+    plant = NLag(gain_c_per_pct=OVEN_K, time_constant_s=OVEN_T, order=float(OVEN_N),
+                 dead_time_s=OVEN_L * l_scale, ambient_c=OVEN_AMBIENT, initial_c=initial_c)
+    return drv, plant, PlantDisturbance.for_channels(1)
 
 
 def oven_step(order: int, l_scale: float = 1.0) -> StepResult:
     """100 -> 150 degC on the oven with AMIGO's set for its two-point FOPDT, the model of this order."""
     tu, tg = oven_two_point()
-    drv = controller(heat_up=True, model=(OVEN_K, tg, tu))
+    drv, plant, dist = oven_loop(True, (OVEN_K, tg, tu), l_scale, initial_c=OVEN_W0)
     kp, tn, tv, td = rule_values(RULE_AMIGO, ks=OVEN_K, tu=tu, tg=tg, vmax=0.0, dy=100.0)
-    for name, value in dict(fKp=kp, fTn=tn, fTv=tv, fTd=td, fTaskCycleTime=OVEN_TS, fCtrlCycleTime=OVEN_TS,
-                            **OVEN_SUPERVISION).items():
+    for name, value in dict(fKp=kp, fTn=tn, fTv=tv, fTd=td).items():
         drv.set(f"sPar.{name}", value)
     drv.set("sPar.nTuneOrder", order)
-    plant = NLag(gain_c_per_pct=OVEN_K, time_constant_s=OVEN_T, order=float(OVEN_N),
-                 dead_time_s=OVEN_L * l_scale, ambient_c=OVEN_AMBIENT, initial_c=OVEN_W0)
-    dist = PlantDisturbance.for_channels(1)
     rng = np.random.default_rng(4)
     drv.set("fbUut.fW1", OVEN_W0)
     drv.set("nMode", ACTIVE)
@@ -378,14 +390,10 @@ class TuneHandOver:
 
 def oven_tune_hand_over(heat_up: bool, after_s: float = 900.0) -> TuneHandOver:
     """TUNE the oven from ambient towards 100 degC (60 % step, AUTO), then ACTIVE at once."""
-    drv = controller(heat_up=heat_up, model=(0.0, 0.0, 0.0))
-    for name, value in dict(fTaskCycleTime=OVEN_TS, fCtrlCycleTime=OVEN_TS, fYTune=60.0, fTuneTimeout=3000.0,
-                            **OVEN_SUPERVISION).items():
-        drv.set(f"sPar.{name}", value)
+    drv, plant, dist = oven_loop(heat_up, (0.0, 0.0, 0.0))
+    drv.set("sPar.fYTune", OVEN_Y_TUNE)
+    drv.set("sPar.fTuneTimeout", 3000.0)
     drv.set("nRule", 0)
-    plant = NLag(gain_c_per_pct=OVEN_K, time_constant_s=OVEN_T, order=float(OVEN_N), dead_time_s=OVEN_L,
-                 ambient_c=OVEN_AMBIENT)
-    dist = PlantDisturbance.for_channels(1)
     rng = np.random.default_rng(5)
     drv.set("fbUut.fW1", OVEN_W0)
     drv.set("nMode", TUNE)
@@ -407,12 +415,8 @@ def oven_tune_hand_over(heat_up: bool, after_s: float = 900.0) -> TuneHandOver:
     assert xs, "TUNE did not end"
     # the true oven's response to the tune step cut to 0 % at the hand-over: the least peak any output gives
     t = np.arange(0.0, 2000.0, OVEN_TS)
-
-    def g(x: np.ndarray) -> np.ndarray:
-        x = np.clip(x, 0.0, None)
-        return 1.0 - np.exp(-x) * sum(x**k / math.factorial(k) for k in range(OVEN_N))
-
-    cut = x0 + OVEN_K * 60.0 * (g((t + age - OVEN_L) / OVEN_T) - g((t - OVEN_L) / OVEN_T))
+    cut = x0 + OVEN_K * OVEN_Y_TUNE * (oven_unit_step((t + age - OVEN_L) / OVEN_T)
+                                      - oven_unit_step((t - OVEN_L) / OVEN_T))
     top = int(np.argmax(xs))
     return TuneHandOver(drv.get("sPar.nTuneOrder"), max(xs), min(xs[top:]), float(cut.max()))
 

@@ -332,6 +332,21 @@ def test_noisy_measurement_still_identified(uut, seed) -> None:
     assert got["fTg"] == pytest.approx(140.0, rel=0.01)
 
 
+@pytest.mark.parametrize("seed", [1, 2])
+def test_a_short_rise_after_a_long_delay_is_recorded_finely(uut, seed) -> None:
+    """A 10 s lag behind a 90 s delay: a record whose spacing had doubled through the delay held 4 means of
+    3.2 s over the rise (K 2.7, T 19.6 identified); one that drops its flat lead keeps the rise in fine
+    entries and starts after most of the delay."""
+    plant = Fopdt(k=2.0, t=10.0, l=90.0, x0=25.0, noise=0.15, rng=random.Random(seed))
+    run_tune(uut, plant, w=100.0, y_tune=40.0)
+    assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
+    got = identified(uut)
+    assert got["fKs"] == pytest.approx(2.0, rel=0.01)
+    assert got["fTu"] == pytest.approx(90.0, rel=0.01)
+    assert got["fTg"] == pytest.approx(10.0, rel=0.02)
+    assert 0.0 < uut.get("fbUut.fbTuner.fHistStart") < 90.0
+
+
 def test_negative_step_tunes_the_cooling_set(uut) -> None:
     uut.set("sPar.fYMin", -100.0)
     uut.set("sPar.fTempAbsLow", -100.0)

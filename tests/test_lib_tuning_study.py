@@ -18,9 +18,6 @@ ROBUST_MS = 2.0
 SHORTFALLS = {
     "FOPDT tau 0.05": "below fTauLagDominated AUTO takes SIMC PI (a derivative reacting to the PV that falls "
     "when a hot end's heater fails delays the heater monitor past L + 5 s): Ms 1.66, IAE 1.38 x AMIGO's",
-    "FOPDT tau 0.9": "the record holds only 4 entries (3.2 s means) of the 14 s rise after a 90 s delay, too "
-    "short for the n-lag fit; the tangent and two-point fit read means across the bend at the delay: "
-    "identified K 2.74 / L 88.3 / T 19.6 for 2.0 / 90 / 10, IAE 1.35 x AMIGO's",
 }
 LAG_DOMINATED_TAU = 0.1  # the library's fTauLagDominated default
 

@@ -18,11 +18,7 @@ from .conftest import run_scenario
 QUICK = {"seed003_hotend_fuzzy": "PID (self-tuned)", "t3_marlin_hotend": None}
 NOT_NOMINAL = ("seed003_sensor_fault",)  # the fault-injection scenario
 # goals not met yet: skipped in CI with the reason, expected failures with THERMOST_SLOW=1
-SHORTFALLS: dict[str, str] = {
-    "nlag_oven": "the band warning is real: the 5 % door load drops the oven to 143.7 degC, 6.3 degC under W "
-    "(fTempLow 5) with the self-tuned set (Kp 0.354 %/degC, Tn 111 s, Tv 35 s); the loop needs a faster load "
-    "response, not a quieter alarm",
-}
+SHORTFALLS: dict[str, str] = {}
 
 
 def names():

@@ -32,6 +32,7 @@ from .metrics import (
     error_integrals,
     overshoot_pct,
     settled_noise_metrics,
+    settling_time,
     step_metrics,
 )
 
@@ -132,8 +133,12 @@ def zone_metrics(result: RunResult, tr: ZoneTrace) -> list[PhaseMetrics]:
             output, true_c = _in_window(tr.y, tr, rec), _in_window(tr.true_c, tr, rec)
             pm.values.update(settled_noise_metrics(t, output, true_c, rec.setpoint, settled))
             if true_c.size:
-                # the process's own overshoot: a quantised, noisy PV adds its noise counts to the peak
+                # the process's own overshoot and settling: a quantised, noisy PV adds its noise counts to the
+                # peak, and noise wider than the band keeps a PV outside a band its process is inside
                 pm.values["true_overshoot_pct"] = overshoot_pct(true_c, float(true_c[0]), rec.setpoint)
+                pm.values["true_settling_time_2pct_s"] = settling_time(
+                    t, true_c, rec.setpoint, BAND_2PCT * abs(w.step), rec.t_start
+                )
         elif rec.ramp_c_per_min is not None:
             pm.kind = "ramp"
             e = sp - y

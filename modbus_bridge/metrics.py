@@ -11,6 +11,7 @@ Keys (units in the name): dead_time_s (first sample 2 % of the step away from y0
 rise_time_s, settling_time_2pct_s, settling_time_5pct_s, overshoot_pct, undershoot_pct, peak_c,
 iae_c_s, ise_c2_s, itae_c_s2, itse_c2_s2, ie_c_s, ss_peak_to_peak_c, ss_std_c (after the 2 % settling),
 ss_output_std_pct, ss_true_ripple_c, ss_true_offset_c (output and true temperature after the settling),
+true_overshoot_pct, true_settling_time_2pct_s (the step judged on the true temperature),
 tv_output_pct (total variation sum |u_k - u_k-1|), pwm_switches_per_min, saturation_time_s,
 max_deviation_c and recovery_time_2pct_s (load disturbances), tuning_duration_s.
 """

@@ -158,3 +158,28 @@ def test_fuzzy_row_without_a_bound_says_it_shows_the_base_set(seed003_outcomes):
     ]
     row = variant_row(variant, dataclasses.replace(o, metrics=unbounded), ms_of)
     assert row_cells(row)[5].endswith("(base set)") and "no Ms bound in use" in row.note
+
+
+def test_rows_are_judged_on_the_true_temperature_as_the_bound_is(seed003_outcomes):
+    from modbus_bridge.scorecard.build import _row
+
+    outcomes, ms_of = seed003_outcomes
+    _, o = outcomes["PID (self-tuned)"]
+    step = next(m.values for m in o.scored_metrics() if m.kind == "step")
+    row = _row("PID", o, None, ms_of)
+    assert row.settling_s == pytest.approx(step["true_settling_time_2pct_s"])
+    assert row.overshoot_pct == pytest.approx(step["true_overshoot_pct"])
+
+
+def test_the_bound_of_a_coupled_plant_holds_its_step_beside_the_other_heater():
+    """TCLab's two heaters share a body: the holding power of heater 1 is the one that holds 60 degC while
+    heater 2 keeps the input that held the start (both at the same input it would sit below the step)."""
+    from modbus_bridge.plants.response import bang_hold_bound
+    from modbus_bridge.scorecard.build import plant_model
+
+    sc = load_scenario(resolve_scenario("t4_tclab"))
+    y0, r = 45.0, 60.0
+    b = bang_hold_bound(plant_model(sc), y0, r, sc.dt_s, 1500.0)
+    assert 0.0 < b.switch_s < b.settling_s < 1500.0
+    assert abs(b.y[-1] - r) < 0.02 * (r - y0)
+    assert b.overshoot_pct < 2.0

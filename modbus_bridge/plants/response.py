@@ -64,14 +64,16 @@ class _Sim:
         return out
 
 
-def _settle(sim: _Sim, u: float) -> float:
-    """Hold every channel at u until the temperature stops moving; returns it. A chunk is longer than
-    the dead time, so "not moving" is never the input still on its way through the delay."""
+def _settle(sim: _Sim, u: float, u_others: float | None = None) -> float:
+    """Hold the channel at u and the others at u_others (default u) until the temperature stops moving;
+    returns it. A chunk is longer than the dead time, so "not moving" is never the input still on its way
+    through the delay."""
+    others = u if u_others is None else u_others
     last = sim.plant.temperatures()[sim.pm.channel]
     chunk = max(SETTLE_CHUNK_S, 2.0 * float(getattr(sim.plant, "dead_time_s", 0.0) or 0.0))
     t = 0.0
     while t < MAX_SETTLE_S:
-        y = sim.run(lambda _t: u, u, chunk)[-1]
+        y = sim.run(lambda _t: u, others, chunk)[-1]
         t += chunk
         if abs(y - last) <= SETTLED_REL * max(1.0, abs(y)):
             return float(y)
@@ -79,25 +81,28 @@ def _settle(sim: _Sim, u: float) -> float:
     return float(last)
 
 
-def steady_temperature(pm: PlantModel, u: float, dt: float = 0.5) -> float:
-    return _settle(_Sim(pm, dt), u)
+def steady_temperature(pm: PlantModel, u: float, dt: float = 0.5, u_others: float | None = None) -> float:
+    return _settle(_Sim(pm, dt), u, u_others)
 
 
-def rest_input(pm: PlantModel, temp_c: float, dt: float = 0.5, tol_c: float = 1e-4) -> float:
-    """The constant input (%) that holds the channel at temp_c (secant on the steady-state map)."""
+def rest_input(
+    pm: PlantModel, temp_c: float, dt: float = 0.5, tol_c: float = 1e-4, u_others: float | None = None
+) -> float:
+    """The constant input (%) that holds the channel at temp_c (secant on the steady-state map), the other
+    channels at u_others (default: the same input)."""
     plant = pm.build()
     lo, hi = plant.u_min_pct, plant.u_max_pct
     u0, u1 = 0.0 if lo <= 0.0 <= hi else lo, 0.5 * (lo + hi) if hi - lo > 1e-9 else hi
     if abs(u1 - u0) < 1e-6:
         u1 = hi
-    y0, y1 = steady_temperature(pm, u0, dt), steady_temperature(pm, u1, dt)
+    y0, y1 = steady_temperature(pm, u0, dt, u_others), steady_temperature(pm, u1, dt, u_others)
     for _ in range(30):
         if abs(y1 - temp_c) < tol_c or y1 == y0:
             break
         u2 = u1 + (temp_c - y1) * (u1 - u0) / (y1 - y0)
         u2 = min(max(u2, lo), hi)
         u0, y0, u1 = u1, y1, u2
-        y1 = steady_temperature(pm, u1, dt)
+        y1 = steady_temperature(pm, u1, dt, u_others)
     if abs(y1 - temp_c) > max(0.05, 1e-3 * abs(temp_c)):
         raise ValueError(f"the plant cannot be held at {temp_c} °C with inputs {lo}..{hi} %")
     return u1
@@ -213,9 +218,12 @@ def _settling(t: np.ndarray, y: np.ndarray, y0: float, r: float) -> float:
 
 def bang_hold_bound(pm: PlantModel, y0: float, r: float, dt: float, horizon_s: float) -> BangHold:
     """The fastest 2 % settling an output limited to the actuator range can give from rest at y0 to r:
-    full power (or full cooling), then the holding power, switched at the best time (grid of dt)."""
+    full power (or full cooling), then the holding power, switched at the best time (grid of dt). The other
+    channels of a multi-channel plant keep the input that held the start; the holding power is the one
+    that holds r beside them."""
     plant = pm.build()
-    u0, ur = rest_input(pm, y0), rest_input(pm, r)
+    u0 = rest_input(pm, y0)
+    ur = rest_input(pm, r, u_others=u0)
     u_full = plant.u_max_pct if r > y0 else plant.u_min_pct
     start = _Sim(pm, dt, start_c=y0)
     _settle(start, u0)

@@ -324,12 +324,17 @@ def test_noisy_measurement_still_identified(uut, seed) -> None:
     use every sample (history entries are means): at +-0.15 degC uniform noise Ks within 0.5 %, Tg within
     1 % and Tu within 5 % (single samples as entries gave up to 0.9 %, 2.0 % and 8.6 % on these seeds)."""
     plant = Fopdt(k=3.4, t=140.0, l=5.5, x0=25.0, noise=0.15, rng=random.Random(seed))
-    run_tune(uut, plant, w=200.0, y_tune=60.0)
+    assert_tune_identifies(uut, plant, w=200.0, y_tune=60.0, rel=(0.005, 0.05, 0.01))
+
+
+def assert_tune_identifies(uut, plant: Fopdt, w: float, y_tune: float, rel: tuple[float, ...]) -> None:
+    """TUNE ends READY with Ks, Tu and Tg of the FOPDT plant within the relative tolerances given."""
+    run_tune(uut, plant, w=w, y_tune=y_tune)
     assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
     got = identified(uut)
-    assert got["fKs"] == pytest.approx(3.4, rel=0.005)
-    assert got["fTu"] == pytest.approx(5.5, rel=0.05)
-    assert got["fTg"] == pytest.approx(140.0, rel=0.01)
+    assert got["fKs"] == pytest.approx(plant.k, rel=rel[0])
+    assert got["fTu"] == pytest.approx(plant.l, rel=rel[1])
+    assert got["fTg"] == pytest.approx(plant.t, rel=rel[2])
 
 
 @pytest.mark.parametrize("seed", [1, 2])
@@ -338,12 +343,7 @@ def test_a_short_rise_after_a_long_delay_is_recorded_finely(uut, seed) -> None:
     3.2 s over the rise (K 2.7, T 19.6 identified); one that drops its flat lead keeps the rise in fine
     entries and starts after most of the delay."""
     plant = Fopdt(k=2.0, t=10.0, l=90.0, x0=25.0, noise=0.15, rng=random.Random(seed))
-    run_tune(uut, plant, w=100.0, y_tune=40.0)
-    assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
-    got = identified(uut)
-    assert got["fKs"] == pytest.approx(2.0, rel=0.01)
-    assert got["fTu"] == pytest.approx(90.0, rel=0.01)
-    assert got["fTg"] == pytest.approx(10.0, rel=0.02)
+    assert_tune_identifies(uut, plant, w=100.0, y_tune=40.0, rel=(0.01, 0.01, 0.02))
     assert 0.0 < uut.get("fbUut.fbTuner.fHistStart") < 90.0
 
 

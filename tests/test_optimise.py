@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from modbus_bridge.optimise.executor import DaskExecutor, LocalExecutor, SerialExecutor
-from modbus_bridge.optimise.experiment import PidGains, cost, run_experiment
+from modbus_bridge.optimise.experiment import Outcome, PidGains, cost, max_overshoot, run_experiment
 from modbus_bridge.optimise.search import Optimiser, Settings, seed004_simplex
 from modbus_bridge.scenario import load_scenario
 from plc.cli import main
@@ -23,6 +23,21 @@ def test_cli_cost_choices_are_the_costs():
     from modbus_bridge.optimise.experiment import COSTS
 
     assert COST_CHOICES == COSTS
+
+
+@pytest.mark.parametrize(
+    ("values", "expected"),
+    [({"overshoot_pct": 4.3, "true_overshoot_pct": 0.1}, 0.1), ({"overshoot_pct": 4.3}, 4.3)],
+    ids=["true-temperature", "pv-only"],
+)
+def test_the_overshoot_constraint_reads_the_true_temperature_where_recorded(values, expected):
+    """A noisy PV adds its peaks to the overshoot: the constraint judges the process, as the scorecard."""
+    from modbus_bridge.analysis import PhaseMetrics
+
+    step = PhaseMetrics("z", "step", "step", 0.0, 10.0, "ok", values=dict(values))
+    empty = np.zeros(0)
+    o = Outcome("x", [step], empty, empty, empty, empty, empty, [("step", 0.0, 10.0)])
+    assert max_overshoot(o) == pytest.approx(expected)
 
 
 def test_seed004_simplex_is_regular():

@@ -198,6 +198,9 @@ def cost(o: Outcome, kind: str) -> float:
 
 
 def max_overshoot(o: Outcome) -> float:
-    vals = [m.values.get("overshoot_pct", 0.0) for m in o.scored_metrics() if m.kind == "step"]
+    """The largest overshoot of a scored step, of the true temperature where the run recorded it (as the
+    scorecard judges it: sensor noise would add its peaks to a PV's), of the measured PV otherwise."""
+    steps = [m.values for m in o.scored_metrics() if m.kind == "step"]
+    vals = [v.get("true_overshoot_pct", v.get("overshoot_pct", 0.0)) for v in steps]
     vals = [v for v in vals if v is not None and math.isfinite(v)]
     return max(vals, default=0.0)

@@ -59,6 +59,25 @@ def wait_for(predicate, timeout: float, what: str, step: float = 0.2):
     raise AssertionError(f"timed out after {timeout} s waiting for {what} (last: {last!r})")
 
 
+CLICK_SETTLE_MS = 3000  # a switch shows its new position at once; a click that did not move it was lost
+
+
+def toggle(switch, want: bool) -> None:
+    """Click a switch until it shows `want` (two tries): on a loaded machine a click that lands while a
+    freshly opened group is still being rendered moves nothing (the switch keeps its position, nothing is
+    written)."""
+    from playwright.sync_api import Error as PlaywrightError
+
+    for _ in range(2):
+        switch.click()
+        try:
+            expect()(switch).to_have_attribute("aria-checked", str(want).lower(), timeout=CLICK_SETTLE_MS)
+            return
+        except (AssertionError, PlaywrightError):
+            continue
+    expect()(switch).to_have_attribute("aria-checked", str(want).lower())
+
+
 def shown(name: str, value: float, decimals: int | None = None) -> str:
     """A register's value as the panel writes it (its metadata's decimals and unit)."""
     from hmi.model import fmt, meta_of
@@ -184,7 +203,7 @@ def test_new_parameters_show_in_their_groups_and_a_coil_switches(stack: Stack, p
     symmetric = bool(got["bFuzzySymmetricZone1"])
     expect()(switch).to_have_attribute("aria-checked", str(symmetric).lower())
     for want in (not symmetric, symmetric):  # switch over and back
-        switch.click()
+        toggle(switch, want)
         note = f"bFuzzySymmetricZone1 {'on' if want else 'off'}: accepted by the PLC"
         # written, read back after a PLC scan, then notified; slow when the machine is busy
         expect()(pg.get_by_text(note)).to_be_visible(timeout=WRITE_TIMEOUT_MS)

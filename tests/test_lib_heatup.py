@@ -436,3 +436,48 @@ def test_a_tune_hand_over_on_the_oven_brakes_the_heat_its_lags_hold() -> None:
     assert planned.peak_c - OVEN_W0 <= 1.25 * least
     assert planned.low_after_peak_c >= OVEN_W0 - BAND * (OVEN_W0 - OVEN_AMBIENT)
     assert plain.peak_c - OVEN_W0 >= 1.5 * least
+
+
+T1_K, T1_T, T1_L, T1_W, T1_AMBIENT, T1_Y_TUNE = 3.4, 140.0, 5.5, 200.0, 25.0, 60.0  # RepRapFirmware's hot end
+
+
+def t1_tune_hand_over(heat_up: bool, after_s: float = 400.0) -> tuple[float, float, float]:
+    """TUNE T1's hot end from ambient towards 200 degC (60 % step, AUTO), then ACTIVE at once: X at the
+    hand-over, the peak after it and the 2 % settling time of the rest of the way to W."""
+    drv = controller(heat_up)
+    drv.set("sPar.fYTune", T1_Y_TUNE)
+    drv.set("sPar.fTuneTimeout", 3000.0)
+    drv.set("nRule", 0)
+    plant = Fopdt(k=T1_K, t=T1_T, l=T1_L, x0=T1_AMBIENT, dt=TS, noise=0.03)
+    drv.set("fbUut.fW1", T1_W)
+    drv.set("nMode", TUNE)
+    xs: list[float] = []
+    for n in range(round((3000.0 + after_s) / TS)):
+        drv.set("fbUut.fX", plant.measure())
+        drv.set("fbUut.nPvSequence", n + 1)
+        drv.scan()
+        if drv.get("nMode") == TUNE and drv.get("nTuneState") == TUNE_READY:
+            drv.set("nMode", ACTIVE)
+        plant.step(drv.get("fbUut.fY"))
+        if drv.get("nMode") == ACTIVE:
+            xs.append(plant.x)
+            if len(xs) >= round(after_s / TS):
+                break
+    assert xs, "TUNE did not end"
+    band = BAND * (T1_W - xs[0])
+    outside = [i for i, x in enumerate(xs) if abs(x - T1_W) > band]
+    settling = (outside[-1] + 1) * TS if outside else 0.0
+    return xs[0], max(xs), settling
+
+
+def test_a_tune_hand_over_on_a_first_order_hot_end_lands_on_w() -> None:
+    """TUNE's step ends at 80 % of the way to W with the hot end still rising on 60 %; the heat-up plans the
+    rest on the step's known history (a first-order model, as on the n-lag oven): it reaches W without
+    overshoot well before the PID alone, which creeps in on its integrator. Planned on the slope seen after
+    the hand-over instead, the response went past W and took twice as long."""
+    x_ho, peak, settling = t1_tune_hand_over(heat_up=True)
+    _, plain_peak, plain_settling = t1_tune_hand_over(heat_up=False)
+    print(f"T1 TUNE -> {T1_W:g} degC from {x_ho:.1f}: planned peak {peak:.2f}, 2 % settling "
+          f"{settling:.1f} s; PID alone {plain_peak:.2f}, {plain_settling:.1f} s")
+    assert peak - T1_W <= BAND * (T1_W - x_ho)
+    assert settling < 0.5 * plain_settling

@@ -197,10 +197,15 @@ def cost(o: Outcome, kind: str) -> float:
     return surface + t_osc + abs(float(np.mean(e[-tail:])))
 
 
+def judged(values: dict, key: str) -> float | None:
+    """A step's figure as the optimiser and the scorecard judge it: of the true temperature where the run
+    recorded it (sensor noise adds its peaks to a PV's and can keep a PV outside a band its process is
+    inside), of the measured PV otherwise; None when the step has neither."""
+    return values.get(f"true_{key}", values.get(key))
+
+
 def max_overshoot(o: Outcome) -> float:
-    """The largest overshoot of a scored step, of the true temperature where the run recorded it (as the
-    scorecard judges it: sensor noise would add its peaks to a PV's), of the measured PV otherwise."""
-    steps = [m.values for m in o.scored_metrics() if m.kind == "step"]
-    vals = [v.get("true_overshoot_pct", v.get("overshoot_pct", 0.0)) for v in steps]
+    """The largest overshoot of a scored step (`judged`)."""
+    vals = [judged(m.values, "overshoot_pct") for m in o.scored_metrics() if m.kind == "step"]
     vals = [v for v in vals if v is not None and math.isfinite(v)]
     return max(vals, default=0.0)

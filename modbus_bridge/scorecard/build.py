@@ -24,6 +24,7 @@ from ..optimise.experiment import (
     Outcome,
     PidGains,
     cost,
+    judged,
     last_tune_index,
     run_experiment,
     variant_scenario,
@@ -78,11 +79,11 @@ def applicable(sc: Scenario) -> str | None:
     return None
 
 
-def _first(o: Outcome, kind: str, key: str) -> float:
+def _step_figure(o: Outcome, key: str) -> float:
+    """The first scored step's figure, as `judged` (NaN without one)."""
     for m in o.scored_metrics():
-        if m.kind == kind and key in m.values:
-            v = m.values[key]
-            return float(v) if v is not None else math.nan
+        if m.kind == "step" and (v := judged(m.values, key)) is not None:
+            return float(v)
     return math.nan
 
 
@@ -101,14 +102,11 @@ def _tuned_gains(o: Outcome) -> PidGains | None:
 
 def _row(name: str, o: Outcome, gains: PidGains | None, ms_of) -> Row:
     row = Row(name, outcome=o, gains=gains)
-    # the step judged on the true temperature, as the bound is: sensor noise wider than the 2 % band would
-    # keep the PV outside a band the process is inside (the measured PV's figures where none was recorded)
-    true_trace = any("true_overshoot_pct" in m.values for m in o.scored_metrics() if m.kind == "step")
-    prefix = "true_" if true_trace else ""
-    row.settling_s = _first(o, "step", f"{prefix}settling_time_2pct_s")
+    # the step judged on the true temperature, as the bound is (`judged`)
+    row.settling_s = _step_figure(o, "settling_time_2pct_s")
     if math.isnan(row.settling_s) and any(m.kind == "step" for m in o.scored_metrics()):
         row.settling_s = math.inf  # not inside the band by the end of the phase
-    row.overshoot_pct = _first(o, "step", f"{prefix}overshoot_pct")
+    row.overshoot_pct = _step_figure(o, "overshoot_pct")
     row.iae = cost(o, "iae")
     for m in o.scored_metrics():
         if "recovery_time_2pct_s" in m.values:

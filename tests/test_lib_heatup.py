@@ -307,20 +307,22 @@ def oven_two_point() -> tuple[float, float]:
 
 
 def oven_loop(heat_up: bool, model: tuple[float, float, float], l_scale: float = 1.0,
-              initial_c: float | None = None) -> tuple[ScanDriver, NLag, PlantDisturbance]:
-    """The controller on the oven's cycle and supervision times, and the oven (delay times l_scale)."""
+              initial_c: float | None = None,
+              t_scale: float = 1.0) -> tuple[ScanDriver, NLag, PlantDisturbance]:
+    """The controller on the oven's cycle and supervision times, and the oven (delay times l_scale, lags
+    times t_scale)."""
     drv = controller(heat_up=heat_up, model=model)
     for name, value in dict(fTaskCycleTime=OVEN_TS, fCtrlCycleTime=OVEN_TS, **OVEN_SUPERVISION).items():
         drv.set(f"sPar.{name}", value)
-    plant = NLag(gain_c_per_pct=OVEN_K, time_constant_s=OVEN_T, order=float(OVEN_N),
+    plant = NLag(gain_c_per_pct=OVEN_K, time_constant_s=OVEN_T * t_scale, order=float(OVEN_N),
                  dead_time_s=OVEN_L * l_scale, ambient_c=OVEN_AMBIENT, initial_c=initial_c)
     return drv, plant, PlantDisturbance.for_channels(1)
 
 
-def oven_step(order: int, l_scale: float = 1.0) -> StepResult:
+def oven_step(order: int, l_scale: float = 1.0, t_scale: float = 1.0) -> StepResult:
     """100 -> 150 degC on the oven with AMIGO's set for its two-point FOPDT, the model of this order."""
     tu, tg = oven_two_point()
-    drv, plant, dist = oven_loop(True, (OVEN_K, tg, tu), l_scale, initial_c=OVEN_W0)
+    drv, plant, dist = oven_loop(True, (OVEN_K, tg, tu), l_scale, initial_c=OVEN_W0, t_scale=t_scale)
     kp, tn, tv, td = rule_values(RULE_AMIGO, ks=OVEN_K, tu=tu, tg=tg, vmax=0.0, dy=100.0)
     for name, value in dict(fKp=kp, fTn=tn, fTv=tv, fTd=td).items():
         drv.set(f"sPar.{name}", value)
@@ -348,8 +350,8 @@ def oven_step(order: int, l_scale: float = 1.0) -> StepResult:
     return StepResult(settling, max(0.0, max(xs) - OVEN_W1) / step * 100.0, ts, xs, [])
 
 
-def oven_bound() -> float:
-    pm = PlantModel("nlag", dict(gain_c_per_pct=OVEN_K, time_constant_s=OVEN_T, order=float(OVEN_N),
+def oven_bound(t_scale: float = 1.0) -> float:
+    pm = PlantModel("nlag", dict(gain_c_per_pct=OVEN_K, time_constant_s=OVEN_T * t_scale, order=float(OVEN_N),
                                  dead_time_s=OVEN_L, ambient_c=OVEN_AMBIENT))
     return bang_hold_bound(pm, OVEN_W0, OVEN_W1, OVEN_TS, 600.0).settling_s
 
@@ -378,6 +380,27 @@ def test_an_oven_with_another_delay_stays_within_the_mismatch_goals(l_scale: flo
     print(f"oven, delay x{l_scale}: {res.settling_s:.1f} s, {res.overshoot_pct:.2f} %")
     assert res.overshoot_pct <= 2.0
     assert res.settling_s <= 1.5 * oven_bound()
+
+
+OVEN_FASTER = ("lags 30 % shorter than the model's: X runs ahead of the model's path, which the rise "
+               "alone cannot tell from a gain above the model's; the PID takes power off and its integral "
+               "recovers with Tn (about 560 s, 3.5x the bound, no overshoot)")
+
+
+OVEN_LAG_SCALES = [pytest.param(0.7, marks=pytest.mark.xfail(reason=OVEN_FASTER, strict=True)), 1.3]
+
+
+@pytest.mark.parametrize("t_scale", OVEN_LAG_SCALES)
+def test_an_oven_with_other_lags_stays_within_the_mismatch_goals(t_scale: float) -> None:
+    """The pulse is over before a chain of lags passes it on, so the limit phase cannot see them. Lags 30 %
+    longer than the model's show on the way up: the rest of the path follows them, and the PID does not wind
+    its integral up pushing the plant onto the model's time scale (planned on the model's lags throughout:
+    962 s, 17 % overshoot)."""
+    res, bound = oven_step(order=OVEN_N, t_scale=t_scale), oven_bound(t_scale)
+    print(f"oven, lags x{t_scale}: {res.settling_s:.1f} s (bound {bound:.1f} s, "
+          f"{res.settling_s / bound:.2f}x), {res.overshoot_pct:.2f} %")
+    assert res.overshoot_pct <= MISMATCH_OVERSHOOT_PCT
+    assert res.settling_s <= MISMATCH_BOUND_RATIO * bound
 
 
 @dataclass

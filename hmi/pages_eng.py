@@ -87,6 +87,11 @@ def params_page(zone: int = 1) -> None:
     switches: list[tuple[str, ui.switch]] = []
     writing: set[str] = set()  # coils whose write is in flight: their switch keeps the entry until it ends
     built: set[str] = set()
+    # A group slides open in a box that shows only as much as the animation has reached. As a scroll box
+    # (Quasar sets overflow hidden) it scrolls to a row brought into view meanwhile (keyboard focus, find in
+    # page, a test driver before its click) and carries that row along while it grows: a switch pressed
+    # there is released over another element and gets no click. Clipped, every row keeps its place.
+    ui.add_css(".q-expansion-item__content { overflow-y: clip !important; }")
 
     def refresh() -> None:
         for name, lab in rows:

@@ -48,8 +48,9 @@ class Panel:
             self.store.add_audit(level, ",".join(values), None, values, "denied", msg)
             ui.notify(msg, type="warning")
             return None
-        if self.poller.stale:
-            msg = f"{what}: the PLC is not reachable, nothing written"
+        why = self.poller.stale_reason()
+        if why:
+            msg = f"{what}: {why}, nothing written"
             ui.notify(msg, type="negative")
             return None
         result = await self.poller.write(values, level)

@@ -101,8 +101,17 @@ class Poller:
 
     @property
     def stale(self) -> bool:
-        return (not self.diag.connected
-                or time.time() - self.diag.last_ok > STALE_AFTER_CYCLES / self.rate_hz + 0.5)
+        return bool(self.stale_reason())
+
+    def stale_reason(self) -> str:
+        """Why the values shown cannot be trusted for a write ("" when they are fresh): no connection, or
+        no answer for longer than a few poll cycles (the PLC, the network or this panel stalled)."""
+        if not self.diag.connected:
+            return "the PLC is not reachable"
+        age = time.time() - self.diag.last_ok
+        if age > STALE_AFTER_CYCLES / self.rate_hz + 0.5:
+            return f"no fresh values from the PLC for {age:.1f} s"
+        return ""
 
     async def run(self) -> None:
         period = 1.0 / self.rate_hz

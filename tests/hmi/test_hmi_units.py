@@ -159,6 +159,19 @@ def test_poller_reports_an_unreachable_plc(tmp_path) -> None:
     asyncio.run(scenario())
 
 
+def test_a_write_on_old_values_says_why_it_is_refused() -> None:
+    """A panel whose values have aged (the PLC, the network or the panel itself stalled) refuses a write and
+    says so; only a lost connection is called unreachable."""
+    from hmi.poller import Poller
+
+    poller = Poller(load_model(load_register_map()), "127.0.0.1", 1, rate_hz=10)
+    assert poller.stale_reason() == "the PLC is not reachable"
+    poller.diag.connected, poller.diag.last_ok = True, time.time()
+    assert poller.stale_reason() == "" and not poller.stale
+    poller.diag.last_ok = time.time() - 5.0
+    assert poller.stale and poller.stale_reason().startswith("no fresh values from the PLC for 5.")
+
+
 def test_simulate_plant_commands() -> None:
     from modbus_bridge.scenario import load_scenario, resolve_scenario
     from modbus_bridge.simulate import PlantSim

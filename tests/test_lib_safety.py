@@ -7,7 +7,19 @@ import math
 
 import pytest
 
+from modbus_bridge.plants.base import PlantDisturbance
+from modbus_bridge.plants.lti import NLag
 from tests.st_helpers import ScanDriver, controller_program, load_test_app
+from tests.test_lib_heatup import (
+    OVEN_AMBIENT,
+    OVEN_K,
+    OVEN_L,
+    OVEN_N,
+    OVEN_T,
+    OVEN_W0,
+    OVEN_W1,
+    oven_two_point,
+)
 
 IDLE, ACTIVE, TUNE = 0, 2, 5
 STATE_ERROR = 8
@@ -181,55 +193,20 @@ def test_heater_monitor_history_delays_the_output_by_the_model_dead_time(uut, de
         f"delay {seen:.1f} s for L = {dead_time} s (bin {bin_s:.1f} s)"
 
 
-class NLag:
-    """K e^(-Ls) / (1 + Ts)^n around an ambient, from rest at the output y0; a chain of exact first-order
-    steps, deterministic dither."""
-
-    def __init__(self, k: float, t: float, l: float, n: int, ambient: float, y0: float) -> None:
-        self.k, self.t, self.ambient = k, t, ambient
-        self.lags = [ambient + k * y0] * n
-        self.delay = [y0] * round(l / TS)
-        self.count = 0
-
-    @property
-    def x(self) -> float:
-        return self.lags[-1]
-
-    def measure(self) -> float:
-        self.count += 1
-        return self.x + 0.02 * math.sin(self.count * 1.7)
-
-    def step(self, u: float) -> None:
-        self.delay.append(u)
-        drive = self.ambient + self.k * self.delay.pop(0)
-        a = math.exp(-TS / self.t)
-        for i, lag in enumerate(self.lags):
-            self.lags[i] = a * lag + (1 - a) * drive
-            drive = self.lags[i]
-
-
-def two_point_fopdt(t: float, l: float, n: int) -> tuple[float, float]:
-    """Tu, Tg of n equal lags read as an FOPDT from the 28.3 % and 63.2 % crossings (Smith)."""
-    from scipy.special import gammaincinv
-
-    x28, x63 = gammaincinv(n, 0.283), gammaincinv(n, 0.632)
-    tg = 1.5 * (x63 - x28) * t
-    return l + x63 * t - tg, tg
-
-
 @pytest.mark.parametrize("fault", [None, "stuck_on"])
 def test_heater_monitor_follows_a_lag_chain_that_is_faster_than_its_model(uut, fault):
-    """A bench oven identified as 4 equal lags (K 2.2 degC/%, T 45 s, L 3 s; its two-point FOPDT has
-    L = 87 s) but 30 % faster: a heat-up pulse (full power 30 s, then the holding power) moves X long before
-    the FOPDT's dead time. That is output activity, not more heat than commanded; a heater stuck on later
-    is still caught."""
-    k, t, l, n = 2.2, 45.0, 3.0, 4
-    tu, tg = two_point_fopdt(t, l, n)
-    for name, value in (("fKs", k), ("fTg", tg), ("fTu", tu), ("nTuneOrder", n), ("fTempAbsHigh", 400.0),
-                        ("fWatchPeriod", 0.0), ("fRunawayPeriod", 0.0)):
+    """The bench oven identified as its 4 equal lags (K 2.2 degC/%, T 45 s, L 4 s; their two-point FOPDT
+    has L = 88 s) but 30 % faster: a heat-up pulse (full power 30 s, then the holding power) moves X long
+    before the FOPDT's dead time. That is output activity, not more heat than commanded; a heater stuck on
+    later is still caught."""
+    tu, tg = oven_two_point()
+    for name, value in (("fKs", OVEN_K), ("fTg", tg), ("fTu", tu), ("nTuneOrder", OVEN_N),
+                        ("fTempAbsHigh", 400.0), ("fWatchPeriod", 0.0), ("fRunawayPeriod", 0.0)):
         uut.set(f"sPar.{name}", value)
-    ambient, y_rest, y_hold = 25.0, (100.0 - 25.0) / k, (150.0 - 25.0) / k
-    plant = NLag(k, 0.7 * t, l, n, ambient, y_rest)
+    y_rest, y_hold = ((w - OVEN_AMBIENT) / OVEN_K for w in (OVEN_W0, OVEN_W1))
+    plant = NLag(gain_c_per_pct=OVEN_K, time_constant_s=0.7 * OVEN_T, order=float(OVEN_N), dead_time_s=OVEN_L,
+                 ambient_c=OVEN_AMBIENT, initial_c=OVEN_W0)
+    dist = PlantDisturbance.for_channels(1)
     t_pulse, t_fault, horizon = 600.0, 1500.0, 1500.0 + tu + 60.0
     uut.set("fbUut.fYManual", y_rest)
     detected = None
@@ -237,7 +214,7 @@ def test_heater_monitor_follows_a_lag_chain_that_is_faster_than_its_model(uut, f
         now = step * TS
         if now >= t_pulse:
             uut.set("fbUut.fYManual", 100.0 if now < t_pulse + 30.0 else y_hold)
-        scan(uut, 4, plant.measure())
+        scan(uut, 4, plant.temperatures()[0] + 0.02 * math.sin(step * 1.7))  # a live sensor's dither
         alarm = uut.get("fbUut.dwAlarm")
         if fault is None or now < t_fault:
             assert not alarm & (OPEN_BIT | STUCK_BIT | DETACHED_BIT | FROZEN_BIT), \
@@ -245,8 +222,9 @@ def test_heater_monitor_follows_a_lag_chain_that_is_faster_than_its_model(uut, f
         elif detected is None and alarm & (OPEN_BIT | STUCK_BIT | DETACHED_BIT):
             detected = (now - t_fault, alarm)
         stuck = fault == "stuck_on" and now >= t_fault
-        plant.step(100.0 if stuck else uut.get("fbUut.fY"))
+        plant.step([100.0 if stuck else uut.get("fbUut.fY")], TS, dist)
     if fault is not None:
         assert detected is not None, f"{fault} not detected"
         assert detected[1] & STUCK_BIT, f"{fault}: alarm {detected[1]:#x}"
+        print(f"stuck on detected after {detected[0]:.1f} s (L of the FOPDT {tu:.1f} s)")
         assert detected[0] <= tu, f"{fault}: detected after {detected[0]:.1f} s"

@@ -385,8 +385,6 @@ def test_an_oven_with_another_delay_stays_within_the_mismatch_goals(l_scale: flo
 OVEN_FASTER = ("lags 30 % shorter than the model's: X runs ahead of the model's path, which the rise "
                "alone cannot tell from a gain above the model's; the PID takes power off and its integral "
                "recovers with Tn (about 560 s, 3.5x the bound, no overshoot)")
-
-
 OVEN_LAG_SCALES = [pytest.param(0.7, marks=pytest.mark.xfail(reason=OVEN_FASTER, strict=True)), 1.3]
 
 

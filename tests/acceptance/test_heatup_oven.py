@@ -31,11 +31,25 @@ def _settle_peak(result) -> float:
     return max(x for x, phase in zip(zone.true_c, zone.phase, strict=True) if phase == "settle")
 
 
-def test_the_oven_lands_on_its_identified_n_lag_model(harness):
+def _tune_settle_step(lags_after_tune: float = 1.0):
+    """The oven's programme up to its step (no door); its lags times lags_after_tune from the hand-over on."""
     sc = load_scenario(resolve_scenario(SCENARIO))
     zone = sc.zones[0]
     phases = [p for p in zone.phases if p.name in ("tune", "settle", "step")]
-    sc = dataclasses.replace(sc, zones=[dataclasses.replace(zone, phases=phases)])
+    if lags_after_tune != 1.0:
+        changed = Disturbance(kind="model_mismatch", at_s=0.0, value=lags_after_tune)
+        phases[1] = dataclasses.replace(phases[1], disturbances=[*phases[1].disturbances, changed])
+    return dataclasses.replace(sc, zones=[dataclasses.replace(zone, phases=phases)]), phases
+
+
+def _bound(sc, w0: float, w1: float, lags: float = 1.0) -> float:
+    """Bang-hold bound of the step on the true oven, its lags times `lags`."""
+    params = {**sc.plant_params, "time_constant_s": sc.plant_params["time_constant_s"] * lags}
+    return bang_hold_bound(PlantModel(sc.plant_model, params, 0), w0, w1, sc.dt_s, 600.0).settling_s
+
+
+def test_the_oven_lands_on_its_identified_n_lag_model(harness):
+    sc, phases = _tune_settle_step()
     runs = {result.variant.name: (result, {m.phase: m for m in metrics}) for result, metrics in
             run_scenario(harness, sc)}
     result, by_phase = runs[MODEL_BASED]
@@ -43,7 +57,7 @@ def test_the_oven_lands_on_its_identified_n_lag_model(harness):
     tune, step = by_phase["tune"].values, by_phase["step"].values
     assert tune["identified_order"] == ORDER
     w0, w1 = phases[0].setpoint_c, phases[2].setpoint_c
-    bound = bang_hold_bound(PlantModel(sc.plant_model, sc.plant_params, 0), w0, w1, sc.dt_s, 600.0).settling_s
+    bound = _bound(sc, w0, w1)
     noise_pct = 100.0 * tune["identified_noise_pp_c"] / abs(w1 - w0)
     pid_alone = next(m for name, (_, m) in runs.items() if name != MODEL_BASED)["step"].values
     print(f"oven 100->150 degC: bound {bound:.1f} s; model-based {step['settling_time_2pct_s']:.1f} s, "
@@ -60,13 +74,8 @@ def test_the_oven_lands_on_its_identified_n_lag_model(harness):
 
 
 def test_an_oven_slower_than_its_model_lands_without_an_alarm(harness):
-    sc = load_scenario(resolve_scenario(SCENARIO))
-    zone = sc.zones[0]
-    phases = [p for p in zone.phases if p.name in ("tune", "settle", "step")]
-    slower = Disturbance(kind="model_mismatch", at_s=0.0, value=SLOWER)
-    phases[1] = dataclasses.replace(phases[1], disturbances=[*phases[1].disturbances, slower])
-    sc = dataclasses.replace(sc, zones=[dataclasses.replace(zone, phases=phases)],
-                             variants=[v for v in sc.variants if v.name == MODEL_BASED])
+    sc, phases = _tune_settle_step(lags_after_tune=SLOWER)
+    sc = dataclasses.replace(sc, variants=[v for v in sc.variants if v.name == MODEL_BASED])
     [(result, metrics)] = run_scenario(harness, sc)
     assert result.error is None, result.error
     trace = result.zones[0]
@@ -74,8 +83,7 @@ def test_an_oven_slower_than_its_model_lands_without_an_alarm(harness):
     assert not raised, f"alarm {raised[0][1]:#x} at {raised[0][0]:.1f} s"
     step = next(m for m in metrics if m.phase == "step").values
     w0, w1 = phases[0].setpoint_c, phases[2].setpoint_c
-    params = {**sc.plant_params, "time_constant_s": sc.plant_params["time_constant_s"] * SLOWER}
-    bound = bang_hold_bound(PlantModel(sc.plant_model, params, 0), w0, w1, sc.dt_s, 600.0).settling_s
+    bound = _bound(sc, w0, w1, SLOWER)
     print(f"oven with lags x{SLOWER}, 100->150 degC: bound {bound:.1f} s; model-based "
           f"{step['true_settling_time_2pct_s']:.1f} s, true overshoot {step['true_overshoot_pct']:.2f} %")
     assert step["true_overshoot_pct"] <= MISMATCH_OVERSHOOT_PCT

@@ -44,7 +44,9 @@ def login(page, stack: Stack, level: str, password: str = "") -> None:
     page.get_by_test_id("login-level").click()
     page.get_by_role("option", name=level).click()
     page.get_by_test_id("login-password").fill(password)
-    page.get_by_test_id("login-submit").click()
+    # an accepted login reloads the page; the old page's level line may change before it goes
+    with page.expect_event("load"):
+        page.get_by_test_id("login-submit").click()
     expect()(page.get_by_test_id("level")).to_have_text(f"level: {level}")
 
 

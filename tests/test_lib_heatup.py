@@ -319,15 +319,21 @@ def oven_loop(heat_up: bool, model: tuple[float, float, float], l_scale: float =
     return drv, plant, PlantDisturbance.for_channels(1)
 
 
-def oven_step(order: int, l_scale: float = 1.0, t_scale: float = 1.0, k_scale: float = 1.0) -> StepResult:
-    """100 -> 150 degC on the oven with AMIGO's set for its two-point FOPDT, the model of this order."""
+def oven_tuned(order: int, initial_c: float, l_scale: float = 1.0, t_scale: float = 1.0,
+               k_scale: float = 1.0) -> tuple[ScanDriver, NLag, PlantDisturbance]:
+    """oven_loop with the heat-up, the oven's two-point FOPDT as the model (of this order) and AMIGO's set."""
     tu, tg = oven_two_point()
-    drv, plant, dist = oven_loop(True, (OVEN_K, tg, tu), l_scale, initial_c=OVEN_W0, t_scale=t_scale,
+    drv, plant, dist = oven_loop(True, (OVEN_K, tg, tu), l_scale, initial_c=initial_c, t_scale=t_scale,
                                  k_scale=k_scale)
     kp, tn, tv, td = rule_values(RULE_AMIGO, ks=OVEN_K, tu=tu, tg=tg, vmax=0.0, dy=100.0)
-    for name, value in dict(fKp=kp, fTn=tn, fTv=tv, fTd=td).items():
+    for name, value in dict(fKp=kp, fTn=tn, fTv=tv, fTd=td, nTuneOrder=order).items():
         drv.set(f"sPar.{name}", value)
-    drv.set("sPar.nTuneOrder", order)
+    return drv, plant, dist
+
+
+def oven_step(order: int, l_scale: float = 1.0, t_scale: float = 1.0, k_scale: float = 1.0) -> StepResult:
+    """100 -> 150 degC on the oven with AMIGO's set for its two-point FOPDT, the model of this order."""
+    drv, plant, dist = oven_tuned(order, OVEN_W0, l_scale, t_scale, k_scale)
     rng = np.random.default_rng(4)
     drv.set("fbUut.fW1", OVEN_W0)
     drv.set("nMode", ACTIVE)
@@ -497,11 +503,7 @@ def test_a_heat_up_as_the_loop_starts_raises_no_monitor_alarm() -> None:
     and two filter times later, when the heat-up's pulse is already in the four lags, where X does not show
     it. Taken as a first-order plant at rest there, its offset made the rest of the pulse look like heat
     nobody commanded (stuck-on at 145 s); it takes the offset from the rest the response started at."""
-    tu, tg = oven_two_point()
-    drv, plant, dist = oven_loop(True, (OVEN_K, tg, tu), initial_c=OVEN_W0)
-    kp, tn, tv, td = rule_values(RULE_AMIGO, ks=OVEN_K, tu=tu, tg=tg, vmax=0.0, dy=100.0)
-    for name, value in dict(fKp=kp, fTn=tn, fTv=tv, fTd=td, nTuneOrder=OVEN_N).items():
-        drv.set(f"sPar.{name}", value)
+    drv, plant, dist = oven_tuned(OVEN_N, OVEN_W0)
     rng = np.random.default_rng(6)
     drv.set("fbUut.fW1", OVEN_W1)
     drv.set("nMode", ACTIVE)

@@ -19,10 +19,8 @@ from tests.test_lib_heatup import (
     OVEN_N,
     OVEN_T,
     OVEN_TS,
-    oven_loop,
-    oven_two_point,
+    oven_tuned,
 )
-from tests.test_lib_tuner import RULE_AMIGO, rule_values
 
 # the oven rests at 100 degC at 0 % (the plant's offset): up to 150 first, then down to 125, so that the
 # holding power of the cool-down (11 %) lies inside the output range
@@ -33,11 +31,7 @@ HOLD_STATE = 3
 
 def oven_cool_down(t_scale: float) -> tuple[float, float, set[int]]:
     """Settling time, overshoot past W (below it) in % of the step and the heat-up states seen."""
-    tu, tg = oven_two_point()
-    drv, plant, dist = oven_loop(True, (OVEN_K, tg, tu), initial_c=START_C, t_scale=t_scale)
-    kp, tn, tv, td = rule_values(RULE_AMIGO, ks=OVEN_K, tu=tu, tg=tg, vmax=0.0, dy=100.0)
-    for name, value in dict(fKp=kp, fTn=tn, fTv=tv, fTd=td, nTuneOrder=OVEN_N).items():
-        drv.set(f"sPar.{name}", value)
+    drv, plant, dist = oven_tuned(OVEN_N, START_C, t_scale=t_scale)
     rng = np.random.default_rng(7)
     drv.set("fbUut.fW1", HIGH_C)
     drv.set("nMode", ACTIVE)

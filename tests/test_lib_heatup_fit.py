@@ -18,7 +18,7 @@ DECLS = """    fT1, fR1, fT2, fR2, fScale, fGain : REAL;
     bFits : BOOL;"""
 BODY = f"""  bFits := FC_HeatUpNLagFit(nOrder := {ORDER}, fT1 := fT1, fR1 := fR1, fT2 := fT2, fR2 := fR2,
                             fDelay := {DELAY_S}, fLag := {LAG_S}, fTOn := {PULSE_S}, fL := {LIMIT_SHARE},
-                            fD := 0.0, fB := 0.0, fScale => fScale, fGain => fGain);"""
+                            fScale => fScale, fGain => fGain);"""
 
 
 def rise(t: float, order: int, lag_s: float, gain: float) -> float:

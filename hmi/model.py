@@ -28,6 +28,7 @@ PANEL_ROLES: dict[str, str] = {
     "tune_rule_used": "nTuneRuleUsedZone{n}",
     "fit_rms": "fTuneFitRmsZone{n}",
     "tune_order": "nTuneOrderZone{n}",
+    "lag_ratio": "fTuneLagRatioZone{n}",
     "ms_tuned": "fMsTunedZone{n}",
     "t_filter_used": "fTFilterUsedZone{n}",
     "w_min": "fWMinZone{n}",

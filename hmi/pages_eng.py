@@ -292,7 +292,10 @@ def tuning_page(zone: int = 1) -> None:
         rule_text = p.model.tune_rules.get(int(rule), str(rule)) if rule is not None else "-"
         quality = ""
         order = p.value(z["tune_order"]) if z.has("tune_order") else None
-        if order:
+        ratio = p.value(z["lag_ratio"]) if z.has("lag_ratio") else None
+        if order and ratio:
+            quality += f"; model: two lags, the second {ratio:.3g} x the first"
+        elif order:
             quality += "; model: first order" if int(order) == 1 else f"; model: {int(order)} equal lags"
         if z.has("fit_rms") and p.value(z["fit_rms"]):
             quality += f"; fit rms {value_text(z['fit_rms'])} of the rise"

@@ -1,0 +1,123 @@
+"""Model-based setpoint response planned on two unequal lags (a TCLab-like heater: block 16.7 s behind its
+heater, sensor 140 s behind the block) over the library's FB_TempController on the soft-PLC.
+
+The model is the one TUNE publishes for such a plant: nTuneOrder 2, fTuneLagRatio = rho and the two-point
+FOPDT of the two lags; the PID is AMIGO's on that FOPDT. A step from rest lands within the goals; a plant
+whose lags or gain differ from the model is followed by the PID alone after the first plan (no second plan
+on two lags), and the figures of the cases that miss the goals are expected failures that state them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+from modbus_bridge.plants.base import PlantDisturbance
+from modbus_bridge.plants.lti import TransferFunctionPlant
+from modbus_bridge.plants.response import PlantModel, bang_hold_bound
+from tests.test_lib_heatup import ACTIVE, BAND, controller
+from tests.test_lib_tuner import RULE_AMIGO, rule_values
+
+K, T_SENSOR, T_BLOCK = 0.6, 140.0, 16.7  # degC/%, s, s
+AMBIENT, W0, W1 = 21.0, 45.0, 60.0
+TS, REST_S, HORIZON_S = 0.1, 1500.0, 700.0
+NOISE = 0.2  # degC, the TCLab's
+SUPERVISION = dict(fWatchPeriod=45.0, fTuneNoisePp=4.0 * NOISE)  # the application's zone-1 watch period
+OVERSHOOT_GOAL = 0.5
+BOUND_RATIO_GOAL = 1.2  # the bang-hold bound overshoots (2.0 % here) to enter the band early; the plan keeps 0.25 %
+MISMATCH_OVERSHOOT_GOAL, MISMATCH_BOUND_RATIO_GOAL = 2.0, 1.5
+
+
+def unit_step(t: float) -> float:
+    return 1.0 - (T_SENSOR * math.exp(-t / T_SENSOR) - T_BLOCK * math.exp(-t / T_BLOCK)) / (T_SENSOR - T_BLOCK)
+
+
+def two_point() -> tuple[float, float]:
+    """(Tu, Tg) of the two-point FOPDT (seed 003, Smith) of the two lags: what TUNE publishes."""
+    t28, t63 = (brentq(lambda t, lv=level: unit_step(t) - lv, 0.0, 20.0 * T_SENSOR) for level in (0.283, 0.632))
+    tg = 1.5 * (t63 - t28)
+    return t63 - tg, tg
+
+
+def plant_params(sensor: float = 1.0, block: float = 1.0, gain: float = 1.0) -> dict:
+    t1, t2 = T_SENSOR * sensor, T_BLOCK * block
+    return dict(num=(K * gain,), den=(t1 * t2, t1 + t2, 1.0), ambient_c=AMBIENT)
+
+
+@dataclass
+class Step:
+    settling_s: float
+    overshoot_pct: float
+    bound_s: float
+
+
+def step(sensor: float = 1.0, block: float = 1.0, gain: float = 1.0) -> Step:
+    """45 -> 60 degC from rest on the plant (lags and gain times these), the model being the nominal one."""
+    tu, tg = two_point()
+    drv = controller(True, model=(K, tg, tu))
+    kp, tn, tv, td = rule_values(RULE_AMIGO, ks=K, tu=tu, tg=tg, vmax=0.0, dy=100.0)
+    for name, value in dict(fTaskCycleTime=TS, fCtrlCycleTime=TS, fKp=kp, fTn=tn, fTv=tv, fTd=td, nTuneOrder=2,
+                            fTuneLagRatio=T_BLOCK / T_SENSOR, **SUPERVISION).items():
+        drv.set(f"sPar.{name}", value)
+    params = plant_params(sensor, block, gain)
+    plant, dist = TransferFunctionPlant(**params), PlantDisturbance.for_channels(1)
+    rng = np.random.default_rng(7)
+    drv.set("fbUut.fW1", W0)
+    drv.set("nMode", ACTIVE)
+    start = round(REST_S / TS)
+    ts, xs = [], []
+    for n in range(start + round(HORIZON_S / TS)):
+        if n == start:
+            drv.set("fbUut.fW1", W1)
+        x = plant.temperatures()[0]
+        drv.set("fbUut.fX", x + rng.normal(0.0, NOISE))
+        drv.set("fbUut.nPvSequence", n + 1)
+        drv.scan()
+        assert drv.get("nState") == ACTIVE, f"state {drv.get('nState')} at {n * TS:.1f} s"
+        if n >= start:
+            ts.append((n - start) * TS)
+            xs.append(x)
+        plant.step([drv.get("fbUut.fY")], TS, dist)
+    outside = [t for t, x in zip(ts, xs, strict=True) if abs(x - W1) > BAND * (W1 - W0)]
+    settling = outside[-1] + TS if outside else 0.0
+    bound = bang_hold_bound(PlantModel("transfer_function", params), W0, W1, TS, HORIZON_S).settling_s
+    return Step(settling, max(0.0, max(xs) - W1) / (W1 - W0) * 100.0, bound)
+
+
+def test_two_unequal_lags_land_on_their_model() -> None:
+    got = step()
+    print(f"two lags 140 s / 16.7 s: settling {got.settling_s:.1f} s = {got.settling_s / got.bound_s:.2f} x the "
+          f"bound {got.bound_s:.1f} s, overshoot {got.overshoot_pct:.2f} %")
+    assert got.overshoot_pct <= OVERSHOOT_GOAL
+    assert got.settling_s <= BOUND_RATIO_GOAL * got.bound_s
+
+
+MISMATCH_SHORTFALLS = {
+    "sensor x0.7": "the pulse planned for the slower sensor carries a faster one past W: 14.4 %, 2.97 x",
+    "sensor x1.3": "the slower sensor lags the path and the PID winds up behind it: 5.4 %, 2.54 x",
+    "gain x0.8": "the model's holding power leaves the plant short and the PID's integral closes the gap: "
+                 "3.2 %, 2.07 x",
+    "gain x1.2": "the model's holding power carries the plant past W: 8.7 %, 2.62 x",
+}
+
+
+def _mismatch_cases():
+    for label, kw in (("sensor x0.7", dict(sensor=0.7)), ("sensor x1.3", dict(sensor=1.3)),
+                      ("block x0.7", dict(block=0.7)), ("block x1.3", dict(block=1.3)),
+                      ("gain x0.8", dict(gain=0.8)), ("gain x1.2", dict(gain=1.2))):
+        why = MISMATCH_SHORTFALLS.get(label)
+        marks = [pytest.mark.xfail(reason=f"known shortfall: {why}", strict=True)] if why else []
+        yield pytest.param(kw, marks=marks, id=label.replace(" ", "_"))
+
+
+@pytest.mark.parametrize("mismatch", list(_mismatch_cases()))
+def test_two_lags_unlike_their_model_stay_within_the_mismatch_goals(mismatch: dict) -> None:
+    got = step(**mismatch)
+    print(f"{mismatch}: settling {got.settling_s:.1f} s = {got.settling_s / got.bound_s:.2f} x the bound "
+          f"{got.bound_s:.1f} s, overshoot {got.overshoot_pct:.2f} %")
+    assert got.overshoot_pct <= MISMATCH_OVERSHOOT_GOAL
+    assert got.settling_s <= MISMATCH_BOUND_RATIO_GOAL * got.bound_s

@@ -245,7 +245,8 @@ class TwoLags:
     def two_point(self) -> tuple[float, float]:
         """Tu, Tg of the two-point FOPDT (seed 003, Smith) of the true response, by bisection."""
         def rise(t: float) -> float:
-            return 1.0 - (self.t1 * math.exp(-t / self.t1) - self.t2 * math.exp(-t / self.t2)) / (self.t1 - self.t2)
+            lagging = self.t1 * math.exp(-t / self.t1) - self.t2 * math.exp(-t / self.t2)
+            return 1.0 - lagging / (self.t1 - self.t2)
 
         def crossing(level: float) -> float:
             lo, hi = 0.0, 20.0 * (self.t1 + self.t2)

@@ -331,30 +331,39 @@ def oven_tuned(order: int, initial_c: float, l_scale: float = 1.0, t_scale: floa
     return drv, plant, dist
 
 
+def step_from_rest(drv: ScanDriver, plant, dist: PlantDisturbance, ts: float, rest_s: float, horizon_s: float,
+                   w0: float, w1: float, noise: float, seed: int) -> StepResult:
+    """W0 for rest_s, then W1 for horizon_s, ACTIVE throughout, on a plant in the loop (its PV with this
+    noise: a live sensor passes the frozen-PV check): the true temperature's 2 % settling and overshoot of
+    the step (heating)."""
+    rng = np.random.default_rng(seed)
+    drv.set("fbUut.fW1", w0)
+    drv.set("nMode", ACTIVE)
+    t_s, xs = [], []
+    start = round(rest_s / ts)
+    for n in range(start + round(horizon_s / ts)):
+        if n == start:
+            drv.set("fbUut.fW1", w1)
+        x = plant.temperatures()[0]
+        drv.set("fbUut.fX", x + rng.normal(0.0, noise))
+        drv.set("fbUut.nPvSequence", n + 1)
+        drv.scan()
+        assert drv.get("nState") == ACTIVE, f"state {drv.get('nState')} at {n * ts:.1f} s"
+        if n >= start:
+            t_s.append((n - start) * ts)
+            xs.append(x)
+        plant.step([drv.get("fbUut.fY")], ts, dist)
+    step = w1 - w0
+    outside = [t for t, x in zip(t_s, xs, strict=True) if abs(x - w1) > BAND * step]
+    settling = outside[-1] + ts if outside else 0.0
+    return StepResult(settling, max(0.0, max(xs) - w1) / step * 100.0, t_s, xs, [])
+
+
 def oven_step(order: int, l_scale: float = 1.0, t_scale: float = 1.0, k_scale: float = 1.0) -> StepResult:
     """100 -> 150 degC on the oven with AMIGO's set for its two-point FOPDT, the model of this order."""
     drv, plant, dist = oven_tuned(order, OVEN_W0, l_scale, t_scale, k_scale)
-    rng = np.random.default_rng(4)
-    drv.set("fbUut.fW1", OVEN_W0)
-    drv.set("nMode", ACTIVE)
-    ts, xs = [], []
-    start = round(OVEN_REST_S / OVEN_TS)
-    for n in range(start + round(OVEN_HORIZON_S / OVEN_TS)):
-        if n == start:
-            drv.set("fbUut.fW1", OVEN_W1)
-        x = plant.temperatures()[0]
-        drv.set("fbUut.fX", x + rng.normal(0.0, 0.03))  # a live sensor (frozen-PV check)
-        drv.set("fbUut.nPvSequence", n + 1)
-        drv.scan()
-        assert drv.get("nState") == ACTIVE, f"state {drv.get('nState')} at {n * OVEN_TS:.1f} s"
-        if n >= start:
-            ts.append((n - start) * OVEN_TS)
-            xs.append(x)
-        plant.step([drv.get("fbUut.fY")], OVEN_TS, dist)
-    step = OVEN_W1 - OVEN_W0
-    outside = [t for t, x in zip(ts, xs, strict=True) if abs(x - OVEN_W1) > BAND * step]
-    settling = outside[-1] + OVEN_TS if outside else 0.0
-    return StepResult(settling, max(0.0, max(xs) - OVEN_W1) / step * 100.0, ts, xs, [])
+    return step_from_rest(drv, plant, dist, OVEN_TS, OVEN_REST_S, OVEN_HORIZON_S, OVEN_W0, OVEN_W1,
+                          noise=0.03, seed=4)
 
 
 def oven_bound(t_scale: float = 1.0, k_scale: float = 1.0) -> float:

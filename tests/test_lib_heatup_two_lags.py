@@ -12,14 +12,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numpy as np
 import pytest
 from scipy.optimize import brentq
 
 from modbus_bridge.plants.base import PlantDisturbance
 from modbus_bridge.plants.lti import TransferFunctionPlant
 from modbus_bridge.plants.response import PlantModel, bang_hold_bound
-from tests.test_lib_heatup import ACTIVE, BAND, controller
+from tests.test_lib_heatup import controller, step_from_rest
 from tests.test_lib_tuner import RULE_AMIGO, rule_values
 
 K, T_SENSOR, T_BLOCK = 0.6, 140.0, 16.7  # degC/%, s, s
@@ -67,27 +66,9 @@ def step(sensor: float = 1.0, block: float = 1.0, gain: float = 1.0) -> Step:
         drv.set(f"sPar.{name}", value)
     params = plant_params(sensor, block, gain)
     plant, dist = TransferFunctionPlant(**params), PlantDisturbance.for_channels(1)
-    rng = np.random.default_rng(7)
-    drv.set("fbUut.fW1", W0)
-    drv.set("nMode", ACTIVE)
-    start = round(REST_S / TS)
-    ts, xs = [], []
-    for n in range(start + round(HORIZON_S / TS)):
-        if n == start:
-            drv.set("fbUut.fW1", W1)
-        x = plant.temperatures()[0]
-        drv.set("fbUut.fX", x + rng.normal(0.0, NOISE))
-        drv.set("fbUut.nPvSequence", n + 1)
-        drv.scan()
-        assert drv.get("nState") == ACTIVE, f"state {drv.get('nState')} at {n * TS:.1f} s"
-        if n >= start:
-            ts.append((n - start) * TS)
-            xs.append(x)
-        plant.step([drv.get("fbUut.fY")], TS, dist)
-    outside = [t for t, x in zip(ts, xs, strict=True) if abs(x - W1) > BAND * (W1 - W0)]
-    settling = outside[-1] + TS if outside else 0.0
+    got = step_from_rest(drv, plant, dist, TS, REST_S, HORIZON_S, W0, W1, NOISE, seed=7)
     bound = bang_hold_bound(PlantModel("transfer_function", params), W0, W1, TS, HORIZON_S).settling_s
-    return Step(settling, max(0.0, max(xs) - W1) / (W1 - W0) * 100.0, bound)
+    return Step(got.settling_s, got.overshoot_pct, bound)
 
 
 def test_two_unequal_lags_land_on_their_model() -> None:

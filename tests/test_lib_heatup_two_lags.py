@@ -9,17 +9,15 @@ on two lags), and the figures of the cases that miss the goals are expected fail
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import pytest
-from scipy.optimize import brentq
 
 from modbus_bridge.plants.base import PlantDisturbance
 from modbus_bridge.plants.lti import TransferFunctionPlant
 from modbus_bridge.plants.response import PlantModel, bang_hold_bound
 from tests.test_lib_heatup import controller, step_from_rest
-from tests.test_lib_tuner import RULE_AMIGO, rule_values
+from tests.test_lib_tuner import RULE_AMIGO, rule_values, two_lags_two_point
 
 K, T_SENSOR, T_BLOCK = 0.6, 140.0, 16.7  # degC/%, s, s
 AMBIENT, W0, W1 = 21.0, 45.0, 60.0
@@ -29,19 +27,6 @@ SUPERVISION = dict(fWatchPeriod=45.0, fTuneNoisePp=4.0 * NOISE)  # the applicati
 OVERSHOOT_GOAL = 0.5
 BOUND_RATIO_GOAL = 1.2  # the bang-hold bound overshoots (2.0 % here) to enter the band; the plan keeps 0.25 %
 MISMATCH_OVERSHOOT_GOAL, MISMATCH_BOUND_RATIO_GOAL = 2.0, 1.5
-
-
-def unit_step(t: float) -> float:
-    lagging = T_SENSOR * math.exp(-t / T_SENSOR) - T_BLOCK * math.exp(-t / T_BLOCK)
-    return 1.0 - lagging / (T_SENSOR - T_BLOCK)
-
-
-def two_point() -> tuple[float, float]:
-    """(Tu, Tg) of the two-point FOPDT (seed 003, Smith) of the two lags: what TUNE publishes."""
-    t28, t63 = (brentq(lambda t, lv=level: unit_step(t) - lv, 0.0, 20.0 * T_SENSOR)
-                for level in (0.283, 0.632))
-    tg = 1.5 * (t63 - t28)
-    return t63 - tg, tg
 
 
 def plant_params(sensor: float = 1.0, block: float = 1.0, gain: float = 1.0) -> dict:
@@ -58,7 +43,7 @@ class Step:
 
 def step(sensor: float = 1.0, block: float = 1.0, gain: float = 1.0) -> Step:
     """45 -> 60 degC from rest on the plant (lags and gain times these), the model being the nominal one."""
-    tu, tg = two_point()
+    tu, tg = two_lags_two_point(T_SENSOR, T_BLOCK)
     drv = controller(True, model=(K, tg, tu))
     kp, tn, tv, td = rule_values(RULE_AMIGO, ks=K, tu=tu, tg=tg, vmax=0.0, dy=100.0)
     for name, value in dict(fTaskCycleTime=TS, fCtrlCycleTime=TS, fKp=kp, fTn=tn, fTv=tv, fTd=td,

@@ -243,19 +243,20 @@ class TwoLags:
         self.plant.step([u], TS, self.dist)
 
     def two_point(self) -> tuple[float, float]:
-        """Tu, Tg of the two-point FOPDT (seed 003, Smith) of the true response, by bisection."""
-        def rise(t: float) -> float:
-            lagging = self.t1 * math.exp(-t / self.t1) - self.t2 * math.exp(-t / self.t2)
-            return 1.0 - lagging / (self.t1 - self.t2)
+        return two_lags_two_point(self.t1, self.t2)
 
-        def crossing(level: float) -> float:
-            lo, hi = 0.0, 20.0 * (self.t1 + self.t2)
-            for _ in range(60):
-                lo, hi = (lo, (lo + hi) / 2) if rise((lo + hi) / 2) >= level else ((lo + hi) / 2, hi)
-            return (lo + hi) / 2
 
-        tg = 1.5 * (crossing(0.632) - crossing(0.283))
-        return crossing(0.632) - tg, tg
+def two_lags_two_point(t1: float, t2: float) -> tuple[float, float]:
+    """(Tu, Tg) of the two-point FOPDT (seed 003, Smith) of 1/((t1 s + 1)(t2 s + 1)): what TUNE publishes for
+    two unequal lags."""
+    from scipy.optimize import brentq
+
+    def rise(t: float) -> float:
+        return 1.0 - (t1 * math.exp(-t / t1) - t2 * math.exp(-t / t2)) / (t1 - t2)
+
+    t28, t63 = (brentq(lambda t, lv=level: rise(t) - lv, 0.0, 20.0 * (t1 + t2)) for level in (0.283, 0.632))
+    tg = 1.5 * (t63 - t28)
+    return t63 - tg, tg
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])

@@ -31,8 +31,9 @@ OMEGA_POINTS = 1500
 
 def scored_step(sc: Scenario) -> tuple[int, float, float]:
     """(phase index, y0, r) of zone 1's scored window: from the first setpoint step between two phases
-    that are not TUNE (a return from the tune setpoint is not the test), else from the end of tuning
-    with y0 = r = the setpoint in force."""
+    that are not TUNE (a return from the tune setpoint is not the test), else from the first phase after
+    tuning with a load or a ramp (the hand-over from TUNE is not the test either: a fixed set starts there
+    at rest), else from the end of tuning; y0 = r = the setpoint in force without a step."""
     z = sc.zones[0]
     start = last_tune_index(z.phases)
     sp = z.phases[start].setpoint_c if start >= 0 else None
@@ -46,7 +47,9 @@ def scored_step(sc: Scenario) -> tuple[int, float, float]:
         sp = p.setpoint_c
     if sp is None:
         raise ValueError(f"{sc.name}: zone 1 has no setpoint")
-    return start + 1, sp, sp
+    first_test = next((i for i in range(start + 1, len(z.phases))
+                       if z.phases[i].disturbances or z.phases[i].ramp_c_per_min is not None), start + 1)
+    return first_test, sp, sp
 
 
 def operating_point(sc: Scenario) -> tuple[float, float]:

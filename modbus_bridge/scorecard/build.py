@@ -61,7 +61,7 @@ class Card:
     step: tuple[float, float] | None = None
     skipped: str | None = None
     tau: float = math.nan
-    step_phase: str | None = None  # zone 1's scored phase that makes the setpoint step
+    step_phase: str | None = None  # zone 1's first scored phase: the setpoint step, or the first load
 
 
 def applicable(sc: Scenario) -> str | None:
@@ -218,8 +218,7 @@ def build_card(sc: Scenario, executor: Executor, evals: int) -> Card:
             )
             row.note = f"{row.note}; {note}" if row.note else note
     card.rows = rows
-    if card.step is not None:
-        card.step_phase = sc.zones[0].phases[scored_from].name
+    card.step_phase = sc.zones[0].phases[scored_from].name
     return card
 
 

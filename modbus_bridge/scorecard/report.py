@@ -58,7 +58,7 @@ def card_markdown(card: Card, png: str | None) -> str:
     where = (
         f"setpoint step {card.step[0]:g} → {card.step[1]:g} °C (phase '{card.step_phase}')"
         if card.step
-        else "no setpoint step after tuning (load only)"
+        else f"no setpoint step after tuning: from the first load or ramp (phase '{card.step_phase}')"
     )
     lines += [f"Scored: zone 1 after tuning; {where}; τ = L/(L+T) of the true model {card.tau:.2f}.", ""]
     lines.append("| " + " | ".join(HEADER) + " |")
@@ -95,7 +95,8 @@ def write_png(card: Card, path: Path) -> None:
         ax.axhspan(r0 - band, r0 + band, color="0.85", zorder=0, label="±2 % band")
     ax.set_xlim(0.0, end if end > 0 else None)
     ax.set_ylabel("PV (°C)")
-    what = f"from the step (phase '{card.step_phase}')" if card.step_phase else "from the end of tuning"
+    what = (f"from the step (phase '{card.step_phase}')" if card.step
+            else f"from the first load or ramp (phase '{card.step_phase}')")
     ax.set_title(f"{card.scenario.name}: zone 1 {what}", fontsize=10)
     ax.legend(fontsize=7, loc="best")
     ax.grid(alpha=0.3)

@@ -80,9 +80,12 @@ def loop_model(sc: Scenario) -> LoopModel:
 
 
 def loop_model_of(pm: PlantModel, temp_c: float, dt: float, sensor_lag_s: float = 0.0) -> LoopModel:
-    """The loop model of a plant at temp_c, sampled every dt, with a sensor lag."""
+    """The loop model of a plant at temp_c, sampled every dt, with a sensor lag. Its FOPDT fit (for the
+    rules) carries the loop's effective dead time: the plant's, plus the sensor lag and half a sample of
+    hold (Skogestad's half rule), so a plant without dead time does not get an infinite gain."""
     t, s, _ = step_response(pm, temp_c, dt=min(dt, 0.1))
-    fit = fit_fopdt(t, s)
+    plant_fit = fit_fopdt(t, s)
+    fit = FopdtFit(plant_fit.gain, plant_fit.time_constant_s, plant_fit.dead_time_s + sensor_lag_s + dt / 2.0)
     slowest = fit.time_constant_s + fit.dead_time_s
     omegas = np.logspace(math.log10(0.01 / slowest), math.log10(math.pi / dt), OMEGA_POINTS)
     g = frequency_response(pm, temp_c, omegas)

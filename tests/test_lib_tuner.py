@@ -511,3 +511,38 @@ def test_a_process_still_drifting_at_rest_is_not_taken_for_noise(uut) -> None:
     noise = uut.get("sPar.fTuneNoisePp")
     drift = 0.4  # degC the band held over fTuneStabilisation (20 s) at the start of the cool-down
     assert 0.0 < noise < drift / 2, f"published noise {noise:.3f} degC"
+
+
+@dataclass
+class DriftingFopdt(Fopdt):
+    """An FOPDT whose rest drifts at `rate` degC/s whatever the output: a neighbour's heat on a coupled
+    plant, which the step's record would otherwise carry as the plant's own response."""
+
+    rate: float = 0.0
+    elapsed: float = 0.0
+
+    def measure(self) -> float:
+        return super().measure() + self.rate * self.elapsed
+
+    def step(self, u: float) -> None:
+        super().step(u)
+        self.elapsed += self.dt
+
+
+DRIFT_PLANT = dict(k=0.5, t=200.0, l=10.0, x0=20.0, noise=0.05)
+DRIFT_W = 50.0  # the record ends at 80 % of the way, a rise of about 24 degC after about 140 s
+
+
+@pytest.mark.parametrize(("rate", "refused"), [(0.03, True), (-0.03, True), (0.005, False), (0.0, False)])
+def test_a_rest_still_drifting_is_no_rest_to_tune_from(uut, rate: float, refused: bool) -> None:
+    """A drift that stays inside the stabilisation band (0.6 degC over its 20 s) but carried over the record
+    moves X by more than a tenth of the rise is refused (error 17, no model); one that moves it less, or a
+    rest that is flat, tunes."""
+    ks_before = uut.get("sPar.fKs")
+    run_tune(uut, DriftingFopdt(rate=rate, **DRIFT_PLANT), w=DRIFT_W, y_tune=100.0)
+    if refused:
+        assert error_of(uut) == 17
+        assert uut.get("sPar.fKs") == ks_before, "a refused record changed the model"
+    else:
+        assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
+        assert uut.get("sPar.fKs") == pytest.approx(DRIFT_PLANT["k"], rel=0.1)

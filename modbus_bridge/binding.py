@@ -52,6 +52,7 @@ ROLE_PATTERNS: dict[str, tuple[str, ...]] = {
     "kp_cool": (r"fKpCoolZone{n}",),
     "tn_cool": (r"fTnCoolZone{n}",),
     "tv_cool": (r"fTvCoolZone{n}",),
+    "td_cool": (r"fTdCoolZone{n}",),
     "ks": (r"fKsZone{n}",),
     "tu": (r"fTuZone{n}",),
     "tg": (r"fTgZone{n}",),

@@ -90,3 +90,19 @@ def test_the_scored_window_starts_at_the_test_not_at_the_hand_over_from_tune(nam
 
     sc = load_scenario(resolve_scenario(name))
     assert sc.zones[0].phases[scored_step(sc)[0]].name == phase
+
+
+def test_a_zone_tuned_on_its_cooling_side_gets_a_fixed_set_in_its_cooling_registers() -> None:
+    """Seed 000 tunes the platform's cooling set and steps it down: a set written to the heating registers
+    would leave that step on the cooling defaults, every fixed set alike."""
+    from modbus_bridge.optimise.experiment import PidGains, fixed_gain_scenario, tunes_cooling
+
+    gains = PidGains(kp=12.0, tn=300.0, tv=20.0, td=5.0)
+    cooled = load_scenario(resolve_scenario("seed000_forming_platform"))
+    heated = load_scenario(resolve_scenario("seed003_hotend_fuzzy"))
+    assert tunes_cooling(cooled.zones[0]) and not tunes_cooling(heated.zones[0])
+    writes = fixed_gain_scenario(cooled, gains, 100.0).zones[0].phases[0].writes
+    assert {k: writes[k] for k in ("fKpCoolZone2", "fTnCoolZone2", "fTvCoolZone2", "fTdCoolZone2")} == {
+        "fKpCoolZone2": 12.0, "fTnCoolZone2": 300.0, "fTvCoolZone2": 20.0, "fTdCoolZone2": 5.0}
+    assert "fKpZone2" not in writes
+    assert fixed_gain_scenario(heated, gains, 100.0).zones[0].phases[0].writes["fKpZone1"] == 12.0

@@ -109,7 +109,7 @@ def main_optimise(args: argparse.Namespace) -> int:
         "executor": executor.name,
         "settle_s": result.settle_s,
         "parameters": b.gains.as_dict(),
-        "registers": _registers(scenario.zones[0].plc_zone, b.gains),
+        "registers": _registers(scenario.zones[0], b.gains),
         "start": {
             **result.start.gains.as_dict(),
             "cost_value": result.start.cost,
@@ -130,7 +130,7 @@ def main_optimise(args: argparse.Namespace) -> int:
     return 0
 
 
-def _registers(zone: int, gains) -> dict[str, float]:
-    from .experiment import gain_writes
+def _registers(zone, gains) -> dict[str, float]:
+    from .experiment import gain_writes, tunes_cooling
 
-    return gain_writes(zone, gains)
+    return gain_writes(zone.plc_zone, gains, cooling=tunes_cooling(zone))

@@ -27,7 +27,7 @@ import numpy as np
 
 from ..analysis import PhaseMetrics
 from ..loop import RunResult
-from ..scenario import Phase, Scenario, Variant
+from ..scenario import Phase, Scenario, Variant, Zone
 
 DERIVATIVE_FILTER_RATIO = 0.25  # Td = Tv / 4, as the project's tuner sets it
 COSTS = ("iae", "itae", "ramp")
@@ -58,11 +58,22 @@ def _setup():
     return HarnessSetup.default()
 
 
-def gain_writes(zone: int, gains: PidGains) -> dict[str, float]:
+def gain_writes(zone: int, gains: PidGains, cooling: bool = False) -> dict[str, float]:
+    """The registers of one PID set: the heating set, or the cooling set (a zone tuned on its cooling
+    side)."""
     from ..binding import resolve_zone
 
     b = resolve_zone(_setup().regmap, zone)
-    return {b["kp"]: gains.kp, b["tn"]: gains.tn, b["tv"]: gains.tv, b["td"]: gains.td_s}
+    roles = ("kp_cool", "tn_cool", "tv_cool", "td_cool") if cooling else ("kp", "tn", "tv", "td")
+    return dict(zip((b[r] for r in roles), (gains.kp, gains.tn, gains.tv, gains.td_s), strict=True))
+
+
+def tunes_cooling(zone: Zone) -> bool:
+    """The zone's TUNE steps its output down (a negative fYTune written with it): it tunes the cooling set,
+    which its cooling steps then use."""
+    return any(p.mode == "TUNE" and any(k.startswith("fYTune") and float(v) < 0.0
+                                        for k, v in p.writes.items())
+               for p in zone.phases)
 
 
 def last_tune_index(phases: list[Phase]) -> int:
@@ -81,7 +92,7 @@ def fixed_gain_scenario(sc: Scenario, gains: PidGains, settle_s: float, seed: in
             if q.fuzzy is not None:
                 q.fuzzy = False
             if i == 0:
-                q.writes.update(gain_writes(z.plc_zone, gains))
+                q.writes.update(gain_writes(z.plc_zone, gains, cooling=tunes_cooling(z)))
             phases.append(q)
         zones.append(dataclasses.replace(z, phases=phases))
     return dataclasses.replace(

@@ -27,6 +27,7 @@ from ..optimise.experiment import (
     judged,
     last_tune_index,
     run_experiment,
+    tunes_cooling,
     variant_scenario,
 )
 from ..optimise.robustness import plant_model, scored_step
@@ -87,16 +88,15 @@ def _step_figure(o: Outcome, key: str) -> float:
     return math.nan
 
 
-def _tuned_gains(o: Outcome) -> PidGains | None:
+def _tuned_gains(o: Outcome, cooling: bool = False) -> PidGains | None:
+    """The set TUNE wrote: the heating set, or the cooling set of a zone tuned on its cooling side."""
+    kp, tn, tv = (("tuned_kp_cool_pct_per_c", "tuned_tn_cool_s", "tuned_tv_cool_s") if cooling
+                  else ("tuned_kp_pct_per_c", "tuned_tn_s", "tuned_tv_s"))
     for m in o.metrics:
-        if m.kind == "tune" and "tuned_kp_pct_per_c" in m.values:
-            tv = float(m.values.get("tuned_tv_s", 0.0))
-            return PidGains(
-                float(m.values["tuned_kp_pct_per_c"]),
-                float(m.values.get("tuned_tn_s", 0.0)),
-                tv,
-                DERIVATIVE_FILTER_RATIO * tv,
-            )
+        if m.kind == "tune" and kp in m.values:
+            tv_s = float(m.values.get(tv, 0.0))
+            return PidGains(float(m.values[kp]), float(m.values.get(tn, 0.0)), tv_s,
+                            DERIVATIVE_FILTER_RATIO * tv_s)
     return None
 
 
@@ -129,11 +129,11 @@ def adapter_bound(o: Outcome) -> dict[str, float] | None:
     return None
 
 
-def variant_row(v: Variant, o: Outcome, ms_of: Callable[[PidGains], float]) -> Row:
+def variant_row(v: Variant, o: Outcome, ms_of: Callable[[PidGains], float], cooling: bool = False) -> Row:
     """A scenario variant's row. With the fuzzy adapter on, the gains move inside the box the adapter's Ms
     bound leaves: Ms is the worst over every set it can reach (fFuzzyMsReachable, on the identified model
     with the filter in use), not the base set's; without a bound in use, the base set's, said so."""
-    row = _row(v.name, o, _tuned_gains(o), ms_of)
+    row = _row(v.name, o, _tuned_gains(o, cooling), ms_of)
     bound = adapter_bound(o)
     if bound is not None:
         row.ms, row.ms_what = bound["fuzzy_ms_reachable"], "worst reachable"
@@ -200,7 +200,7 @@ def build_card(sc: Scenario, executor: Executor, evals: int) -> Card:
         if ev.outcome is not None:
             rows.append(_row(name, ev.outcome, ev.gains, opt.model.ms))
     for v, o in zip(sc.variants, outcomes, strict=True):
-        rows.append(variant_row(v, o, opt.model.ms))
+        rows.append(variant_row(v, o, opt.model.ms, cooling=tunes_cooling(sc.zones[0])))
     best_iae = rows[1].iae if best.best.outcome is not None and len(rows) > 1 else math.nan
     if card.bound is None:
         best_iae = rows[0].iae if rows and rows[0].outcome is not None else math.nan

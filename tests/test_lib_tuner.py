@@ -546,3 +546,17 @@ def test_a_rest_still_drifting_is_no_rest_to_tune_from(uut, rate: float, refused
     else:
         assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
         assert uut.get("sPar.fKs") == pytest.approx(DRIFT_PLANT["k"], rel=0.1)
+
+
+def test_a_zone_still_settling_from_its_last_run_still_tunes(uut) -> None:
+    """TUNE while the zone still cools from running hotter (4 degC above its rest, T = 100 s): that drift
+    decays with the plant's own T, so over the record it moves X by at most drift T (1 - e^(-te/T)), within
+    a tenth of the rise, where drift times the record's length would not be."""
+    plant = Fopdt(k=0.5, t=100.0, l=5.0, x0=20.0, noise=0.05, rng=random.Random(3))
+    plant.x = 24.0
+    run_tune(uut, plant, w=65.0, y_tune=100.0)
+    assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
+    drift, record = abs(uut.get("fbUut.fbTuner.fRestDrift")), uut.get("fbUut.fbTuner.fStepAge")
+    rise = uut.get("fbUut.fbTuner.fRise")
+    print(f"drift {drift:.3f} degC/s, record {record:.1f} s, rise {rise:.1f} degC")
+    assert drift * record > 0.1 * rise, "the rest did not drift enough to tell the two readings apart"

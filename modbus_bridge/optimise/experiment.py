@@ -123,9 +123,10 @@ class Outcome:
     pv: np.ndarray
     true_c: np.ndarray
     setpoint: np.ndarray
-    u: np.ndarray
+    u: np.ndarray  # output applied to the plant, % (a PWM heater: its duty over each step)
     phases: list[tuple[str, float, float]]  # zone 1: name, start, end
     scored_from_phase: int = 0
+    y: np.ndarray | None = None  # the controller's output register, % (what a PWM output modulates)
     error: str | None = None
     wall_s: float = 0.0
     plant_time_s: float = 0.0
@@ -169,6 +170,7 @@ def outcome_of(label: str, result: RunResult, metrics: list[PhaseMetrics], score
         u=np.asarray(tr.u),
         phases=[(p.name, p.t_start, p.t_end) for p in tr.phases],
         scored_from_phase=scored_from_phase,
+        y=np.asarray(tr.y) if len(tr.y) == len(tr.t) else None,
         error=result.error,
         plant_time_s=result.plant_time_s,
     )

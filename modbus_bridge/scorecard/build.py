@@ -223,7 +223,9 @@ def build_card(sc: Scenario, executor: Executor, evals: int) -> Card:
 
 
 def trace_window(o: Outcome, phase: str | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """t from the start of `phase` (or of the scored window), PV and output, from there to the end."""
+    """t from the start of `phase` (or of the scored window), PV and the controller's output (its register:
+    a PWM heater's duty switches 0/100 every period and would hide it), from there to the end."""
     start = next((p[1] for p in o.phases if p[0] == phase), o.scored_start)
     m = o.t >= start - 1e-9
-    return o.t[m] - start, o.pv[m], o.u[m]
+    out = o.y if o.y is not None else o.u
+    return o.t[m] - start, o.pv[m], out[m]

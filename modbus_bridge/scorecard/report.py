@@ -100,7 +100,7 @@ def write_png(card: Card, path: Path) -> None:
     ax.set_title(f"{card.scenario.name}: zone 1 {what}", fontsize=10)
     ax.legend(fontsize=7, loc="best")
     ax.grid(alpha=0.3)
-    axu.set_ylabel("output (%)")
+    axu.set_ylabel("controller output (%)")
     axu.set_xlabel("t (s)")
     axu.grid(alpha=0.3)
     fig.tight_layout()

@@ -60,7 +60,7 @@ def test_a_gain_off_the_model_is_seen_on_the_way_up(k_scale: float, t_scale: flo
 def test_a_time_constant_off_the_model_keeps_the_model_s_gain(t_scale: float) -> None:
     drv = controller(heat_up=True)
     step_response(drv, t=T * t_scale)
-    assert drv.get("fbUut.fbHeatUp.nLineN") > 0, "the rise was not fitted"
+    assert drv.get("fbUut.fbHeatUp.fbEndFit.nCount") > 0, "the rise was not fitted"
     assert drv.get("fbUut.fbHeatUp.fGainSeen") == MODEL_GAIN
 
 

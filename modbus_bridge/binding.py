@@ -53,6 +53,7 @@ ROLE_PATTERNS: dict[str, tuple[str, ...]] = {
     "tn_cool": (r"fTnCoolZone{n}",),
     "tv_cool": (r"fTvCoolZone{n}",),
     "td_cool": (r"fTdCoolZone{n}",),
+    "y_tune": (r"fYTuneZone{n}",),
     "ks": (r"fKsZone{n}",),
     "tu": (r"fTuZone{n}",),
     "tg": (r"fTgZone{n}",),

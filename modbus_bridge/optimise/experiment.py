@@ -69,11 +69,12 @@ def gain_writes(zone: int, gains: PidGains, cooling: bool = False) -> dict[str, 
 
 
 def tunes_cooling(zone: Zone) -> bool:
-    """The zone's TUNE steps its output down (a negative fYTune written with it): it tunes the cooling set,
-    which its cooling steps then use."""
-    return any(p.mode == "TUNE" and any(k.startswith("fYTune") and float(v) < 0.0
-                                        for k, v in p.writes.items())
-               for p in zone.phases)
+    """The zone's TUNE steps its output down (a negative step written to its fYTune register with it): it
+    tunes the cooling set, which its cooling steps then use."""
+    from ..binding import resolve_zone
+
+    y_tune = resolve_zone(_setup().regmap, zone.plc_zone)["y_tune"]
+    return any(p.mode == "TUNE" and float(p.writes.get(y_tune, 0.0)) < 0.0 for p in zone.phases)
 
 
 def last_tune_index(phases: list[Phase]) -> int:

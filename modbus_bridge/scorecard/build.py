@@ -62,7 +62,7 @@ class Card:
     step: tuple[float, float] | None = None
     skipped: str | None = None
     tau: float = math.nan
-    step_phase: str | None = None  # zone 1's first scored phase: the setpoint step, or the first load
+    scored_phase: str | None = None  # zone 1's first scored phase: the setpoint step, or the first load
 
 
 def applicable(sc: Scenario) -> str | None:
@@ -218,7 +218,7 @@ def build_card(sc: Scenario, executor: Executor, evals: int) -> Card:
             )
             row.note = f"{row.note}; {note}" if row.note else note
     card.rows = rows
-    card.step_phase = sc.zones[0].phases[scored_from].name
+    card.scored_phase = sc.zones[0].phases[scored_from].name
     return card
 
 

@@ -56,9 +56,9 @@ def card_markdown(card: Card, png: str | None) -> str:
     if sc.reference:
         lines += [f"Paper / source: {sc.reference}", ""]
     where = (
-        f"setpoint step {card.step[0]:g} → {card.step[1]:g} °C (phase '{card.step_phase}')"
+        f"setpoint step {card.step[0]:g} → {card.step[1]:g} °C (phase '{card.scored_phase}')"
         if card.step
-        else f"no setpoint step after tuning: from the first load or ramp (phase '{card.step_phase}')"
+        else f"no setpoint step after tuning: from the first load or ramp (phase '{card.scored_phase}')"
     )
     lines += [f"Scored: zone 1 after tuning; {where}; τ = L/(L+T) of the true model {card.tau:.2f}.", ""]
     lines.append("| " + " | ".join(HEADER) + " |")
@@ -81,7 +81,7 @@ def write_png(card: Card, path: Path) -> None:
     for r in card.rows:
         if r.outcome is None:
             continue
-        t, pv, u = trace_window(r.outcome, card.step_phase)
+        t, pv, u = trace_window(r.outcome, card.scored_phase)
         ax.plot(t, pv, lw=1.1, label=r.name)
         axu.plot(t, u, lw=0.9)
         end = max(end, float(t[-1]) if t.size else 0.0)
@@ -95,8 +95,8 @@ def write_png(card: Card, path: Path) -> None:
         ax.axhspan(r0 - band, r0 + band, color="0.85", zorder=0, label="±2 % band")
     ax.set_xlim(0.0, end if end > 0 else None)
     ax.set_ylabel("PV (°C)")
-    what = (f"from the step (phase '{card.step_phase}')" if card.step
-            else f"from the first load or ramp (phase '{card.step_phase}')")
+    what = (f"from the step (phase '{card.scored_phase}')" if card.step
+            else f"from the first load or ramp (phase '{card.scored_phase}')")
     ax.set_title(f"{card.scenario.name}: zone 1 {what}", fontsize=10)
     ax.legend(fontsize=7, loc="best")
     ax.grid(alpha=0.3)

@@ -5,12 +5,16 @@ The model is the one TUNE publishes for such a plant: nTuneOrder 2, fTuneLagRati
 FOPDT of the two lags; the PID is AMIGO's on that FOPDT. A step from rest lands within the goals; a plant
 whose lags or gain differ from the model is followed by the PID alone after the first plan (no second plan
 on two lags), and the figures of the cases that miss the goals are expected failures that state them.
+At the TCLab's 0.2 degC noise one run's overshoot moves by a few tenths of a percent with the noise draw
+(0.075 degC is 0.5 % of the step), so the nominal step is held to the goals on the mean of NOMINAL_SEEDS
+noise draws, and the worst of them is printed.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
 import pytest
 
 from modbus_bridge.plants.base import PlantDisturbance
@@ -27,6 +31,8 @@ SUPERVISION = dict(fWatchPeriod=45.0, fTuneNoisePp=4.0 * NOISE)  # the applicati
 OVERSHOOT_GOAL = 0.5
 BOUND_RATIO_GOAL = 1.2  # the bang-hold bound overshoots (2.0 % here) to enter the band; the plan keeps 0.25 %
 MISMATCH_OVERSHOOT_GOAL, MISMATCH_BOUND_RATIO_GOAL = 2.0, 1.5
+MISMATCH_SEED = 7
+NOMINAL_SEEDS = range(1, 8)
 
 
 def plant_params(sensor: float = 1.0, block: float = 1.0, gain: float = 1.0) -> dict:
@@ -41,7 +47,7 @@ class Step:
     bound_s: float
 
 
-def step(sensor: float = 1.0, block: float = 1.0, gain: float = 1.0) -> Step:
+def step(sensor: float = 1.0, block: float = 1.0, gain: float = 1.0, seed: int = MISMATCH_SEED) -> Step:
     """45 -> 60 degC from rest on the plant (lags and gain times these), the model being the nominal one."""
     tu, tg = two_lags_two_point(T_SENSOR, T_BLOCK)
     drv = controller(True, model=(K, tg, tu))
@@ -51,25 +57,29 @@ def step(sensor: float = 1.0, block: float = 1.0, gain: float = 1.0) -> Step:
         drv.set(f"sPar.{name}", value)
     params = plant_params(sensor, block, gain)
     plant, dist = TransferFunctionPlant(**params), PlantDisturbance.for_channels(1)
-    got = step_from_rest(drv, plant, dist, TS, REST_S, HORIZON_S, W0, W1, NOISE, seed=7)
+    got = step_from_rest(drv, plant, dist, TS, REST_S, HORIZON_S, W0, W1, NOISE, seed=seed)
     bound = bang_hold_bound(PlantModel("transfer_function", params), W0, W1, TS, HORIZON_S).settling_s
     return Step(got.settling_s, got.overshoot_pct, bound)
 
 
 def test_two_unequal_lags_land_on_their_model() -> None:
-    got = step()
-    print(f"two lags 140 s / 16.7 s: settling {got.settling_s:.1f} s = {got.settling_s / got.bound_s:.2f} x "
-          f"the bound {got.bound_s:.1f} s, overshoot {got.overshoot_pct:.2f} %")
-    assert got.overshoot_pct <= OVERSHOOT_GOAL
-    assert got.settling_s <= BOUND_RATIO_GOAL * got.bound_s
+    runs = [step(seed=seed) for seed in NOMINAL_SEEDS]
+    overshoot = float(np.mean([r.overshoot_pct for r in runs]))
+    ratio = float(np.mean([r.settling_s / r.bound_s for r in runs]))
+    worst_ratio = max(r.settling_s / r.bound_s for r in runs)
+    print(f"two lags 140 s / 16.7 s, {len(runs)} noise draws: mean settling {ratio:.2f} x the bound "
+          f"{runs[0].bound_s:.1f} s (worst {worst_ratio:.2f} x), mean overshoot {overshoot:.2f} % "
+          f"(worst {max(r.overshoot_pct for r in runs):.2f} %)")
+    assert overshoot <= OVERSHOOT_GOAL
+    assert ratio <= BOUND_RATIO_GOAL
 
 
 MISMATCH_SHORTFALLS = {
-    "sensor x0.7": "the pulse planned for the slower sensor carries a faster one past W: 14.4 %, 2.97 x",
-    "sensor x1.3": "the slower sensor lags the path and the PID winds up behind it: 5.4 %, 2.54 x",
+    "sensor x0.7": "the pulse planned for the slower sensor carries a faster one past W: 16.4 %, 3.03 x",
+    "sensor x1.3": "the slower sensor lags the path and the PID winds up behind it: 5.4 %, 2.51 x",
     "gain x0.8": "the model's holding power leaves the plant short and the PID's integral closes the gap: "
-                 "3.2 %, 2.07 x",
-    "gain x1.2": "the model's holding power carries the plant past W: 8.7 %, 2.62 x",
+                 "3.2 %, 2.10 x",
+    "gain x1.2": "the model's holding power carries the plant past W: 9.0 %, 2.66 x",
 }
 
 

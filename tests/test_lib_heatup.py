@@ -11,6 +11,7 @@ that model and lands without the overshoot a first-order plan leaves there."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -331,11 +332,29 @@ def oven_tuned(order: int, initial_c: float, l_scale: float = 1.0, t_scale: floa
     return drv, plant, dist
 
 
+def tune_from(drv: ScanDriver, plant, dist: PlantDisturbance, ts: float, w: float, timeout_s: float,
+              noise: float, rng: np.random.Generator) -> None:
+    """TUNE towards w on a plant in the loop (its PV with this noise) until READY, then ACTIVE."""
+    drv.set("sPar.fTuneTimeout", timeout_s)
+    drv.set("fbUut.fW1", w)
+    drv.set("nMode", TUNE)
+    seq = 0
+    while drv.get("nTuneState") != TUNE_READY:
+        assert seq * ts < timeout_s, "TUNE did not end"
+        seq += 1
+        drv.set("fbUut.fX", plant.temperatures()[0] + rng.normal(0.0, noise))
+        drv.set("fbUut.nPvSequence", seq)
+        drv.scan()
+        plant.step([drv.get("fbUut.fY")], ts, dist)
+    drv.set("nMode", ACTIVE)
+
+
 def step_from_rest(drv: ScanDriver, plant, dist: PlantDisturbance, ts: float, rest_s: float, horizon_s: float,
-                   w0: float, w1: float, noise: float, seed: int) -> StepResult:
+                   w0: float, w1: float, noise: float, seed: int,
+                   sensor: Callable[[float], float] = float) -> StepResult:
     """W0 for rest_s, then W1 for horizon_s, ACTIVE throughout, on a plant in the loop (its PV with this
-    noise: a live sensor passes the frozen-PV check): the true temperature's 2 % settling and overshoot of
-    the step (heating)."""
+    noise, then read through `sensor`, e.g. an ADC's counts: a live sensor passes the frozen-PV check): the
+    true temperature's 2 % settling and overshoot of the step (heating)."""
     rng = np.random.default_rng(seed)
     drv.set("fbUut.fW1", w0)
     drv.set("nMode", ACTIVE)
@@ -345,7 +364,7 @@ def step_from_rest(drv: ScanDriver, plant, dist: PlantDisturbance, ts: float, re
         if n == start:
             drv.set("fbUut.fW1", w1)
         x = plant.temperatures()[0]
-        drv.set("fbUut.fX", x + rng.normal(0.0, noise))
+        drv.set("fbUut.fX", sensor(x + rng.normal(0.0, noise)))
         drv.set("fbUut.nPvSequence", n + 1)
         drv.scan()
         assert drv.get("nState") == ACTIVE, f"state {drv.get('nState')} at {n * ts:.1f} s"

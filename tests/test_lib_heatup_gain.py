@@ -20,17 +20,15 @@ from modbus_bridge.plants.response import PlantModel, bang_hold_bound
 from modbus_bridge.plants.thermal import NonlinearHotend
 from tests.st_helpers import ScanDriver
 from tests.test_lib_heatup import (
-    ACTIVE,
     BAND,
     TS,
-    TUNE,
-    TUNE_READY,
     K,
     T,
     bound_s,
     controller,
     step_from_rest,
     step_response,
+    tune_from,
 )
 
 MISMATCH_OVERSHOOT_PCT = 2.0  # the mismatch goals of the model-based response
@@ -79,18 +77,7 @@ def t6_step(heat_up: bool) -> tuple[float, float, float]:
     dist = PlantDisturbance.for_channels(1)
     rng = np.random.default_rng(T6_SEED)
     drv: ScanDriver = controller(heat_up)
-    drv.set("sPar.fTuneTimeout", T6_TUNE_TIMEOUT_S)
-    drv.set("fbUut.fW1", T6_TUNE_W)
-    drv.set("nMode", TUNE)
-    seq = 0
-    while drv.get("nTuneState") != TUNE_READY:
-        assert seq * TS < T6_TUNE_TIMEOUT_S, "TUNE did not end"
-        seq += 1
-        drv.set("fbUut.fX", plant.temperatures()[0] + rng.normal(0.0, T6_NOISE_C))
-        drv.set("fbUut.nPvSequence", seq)
-        drv.scan()
-        plant.step([drv.get("fbUut.fY")], TS, dist)
-    drv.set("nMode", ACTIVE)
+    tune_from(drv, plant, dist, TS, T6_TUNE_W, T6_TUNE_TIMEOUT_S, T6_NOISE_C, rng)
     res = step_from_rest(drv, plant, dist, TS, T6_HOLD_S, T6_STEP_S, T6_TUNE_W, T6_W1, noise=T6_NOISE_C,
                          seed=T6_SEED)
     return drv.get("fbUut.fbHeatUp.fGainSeen"), res.settling_s, res.overshoot_pct

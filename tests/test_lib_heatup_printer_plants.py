@@ -19,7 +19,7 @@ import pytest
 
 from modbus_bridge.plants.base import PlantDisturbance
 from modbus_bridge.plants.response import PlantModel, bang_hold_bound
-from tests.test_lib_heatup import ACTIVE, TS, TUNE, TUNE_READY, controller, step_from_rest
+from tests.test_lib_heatup import TS, controller, step_from_rest, tune_from
 
 NOMINAL_OVERSHOOT_PCT = 0.5  # the nominal goals of the model-based response
 NOMINAL_BOUND_RATIO = 1.05
@@ -65,18 +65,7 @@ def tuned_step(p: PrinterPlant, heat_up: bool, seed: int = 2) -> Step:
     drv = controller(heat_up)
     for name, value in p.supervision:
         drv.set(f"sPar.{name}", value)
-    drv.set("sPar.fTuneTimeout", p.tune_timeout_s)
-    drv.set("fbUut.fW1", p.tune_w)
-    drv.set("nMode", TUNE)
-    seq = 0
-    while drv.get("nTuneState") != TUNE_READY:
-        assert seq * TS < p.tune_timeout_s, f"{p.label}: TUNE did not end"
-        seq += 1
-        drv.set("fbUut.fX", plant.temperatures()[0] + rng.normal(0.0, NOISE_C))
-        drv.set("fbUut.nPvSequence", seq)
-        drv.scan()
-        plant.step([drv.get("fbUut.fY")], TS, dist)
-    drv.set("nMode", ACTIVE)
+    tune_from(drv, plant, dist, TS, p.tune_w, p.tune_timeout_s, NOISE_C, rng)
     got = step_from_rest(drv, plant, dist, TS, p.rest_s, p.step_s, p.tune_w, p.step_w, noise=NOISE_C,
                          seed=seed)
     return Step(got.settling_s, got.overshoot_pct)

@@ -11,35 +11,23 @@ of the step), where the plan from one sample and one crossing left 0.53-0.54 % o
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import pytest
 
 from modbus_bridge.plants.base import PlantDisturbance
 from modbus_bridge.plants.linear import Fopdt
 from modbus_bridge.plants.response import PlantModel, bang_hold_bound
-from tests.st_helpers import ScanDriver, controller_program, load_test_app
-from tests.test_lib_heatup import step_from_rest
+from tests.test_lib_heatup import TS, StepResult, controller, step_from_rest
 from tests.test_lib_tuner import RULE_SIMC, rule_values
 
-ACTIVE = 2
 K, T, L, AMBIENT = 3.4, 140.0, 5.5, 25.0  # reference/control.md T1 (RepRapFirmware default hot end)
-TS = 0.1
 W0, W1 = 200.0, 240.0
 REST_S, HORIZON_S = 900.0, 200.0
 COUNT_C, NOISE_C = 0.23, 0.05  # one ADC count near 240 degC, sensor noise sigma
 NOISE_WINDOW = 200  # samples at rest from which the noise peak-to-peak is taken, as TUNE measures it
 OVERSHOOT_GOAL_PCT = 0.5  # the nominal goals of the model-based response
 BOUND_RATIO_GOAL = 1.05
-BAND = 0.02
 SEEDS = range(1, 6)
-
-
-@dataclass
-class Step:
-    settling_s: float
-    overshoot_pct: float
 
 
 def quantised(x: float) -> float:
@@ -50,20 +38,16 @@ def noise_pp(rng: np.random.Generator) -> float:
     return float(np.ptp([quantised(W1 + rng.normal(0.0, NOISE_C)) for _ in range(NOISE_WINDOW)]))
 
 
-def step(seed: int) -> Step:
-    rng = np.random.default_rng(seed)
-    drv = ScanDriver(load_test_app(controller_program()))
+def step(seed: int) -> StepResult:
+    drv = controller(heat_up=True, model=(K, T, L))
     kp, tn, tv, td = rule_values(RULE_SIMC, ks=K, tu=L, tg=T, vmax=0.0, dy=100.0)
-    pp = noise_pp(rng)
-    for name, value in dict(fKp=kp, fTn=tn, fTv=tv, fTd=td, fYMin=0.0, fYMax=100.0, fWMax=300.0,
-                            fXMax=400.0, fTempAbsHigh=300.0, fPvTimeout=0.0, fKs=K, fTg=T, fTu=L,
-                            fTuneNoisePp=pp, fTaskCycleTime=TS, fCtrlCycleTime=TS).items():
+    pp = noise_pp(np.random.default_rng(seed))
+    for name, value in dict(fKp=kp, fTn=tn, fTv=tv, fTd=td, fTuneNoisePp=pp, fTaskCycleTime=TS,
+                            fCtrlCycleTime=TS).items():
         drv.set(f"sPar.{name}", value)
-    drv.set("sPar.bHeatUp", True)
     plant = Fopdt(gain_c_per_pct=K, time_constant_s=T, dead_time_s=L, ambient_c=AMBIENT)
-    got = step_from_rest(drv, plant, PlantDisturbance.for_channels(1), TS, REST_S, HORIZON_S, W0, W1,
-                         noise=NOISE_C, seed=seed, sensor=quantised)
-    return Step(got.settling_s, got.overshoot_pct)
+    return step_from_rest(drv, plant, PlantDisturbance.for_channels(1), TS, REST_S, HORIZON_S, W0, W1,
+                          noise=NOISE_C, seed=seed, sensor=quantised)
 
 
 def bound_s() -> float:

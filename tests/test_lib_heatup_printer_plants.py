@@ -19,7 +19,7 @@ import pytest
 
 from modbus_bridge.plants.base import PlantDisturbance
 from modbus_bridge.plants.response import PlantModel, bang_hold_bound
-from tests.test_lib_heatup import TS, controller, step_from_rest, tune_from
+from tests.test_lib_heatup import TS, StepResult, controller, step_from_rest, tune_from
 
 NOMINAL_OVERSHOOT_PCT = 0.5  # the nominal goals of the model-based response
 NOMINAL_BOUND_RATIO = 1.05
@@ -53,22 +53,15 @@ PLANTS = (
 )
 
 
-@dataclass
-class Step:
-    settling_s: float
-    overshoot_pct: float
-
-
-def tuned_step(p: PrinterPlant, heat_up: bool, seed: int = 2) -> Step:
+def tuned_step(p: PrinterPlant, heat_up: bool, seed: int = 2) -> StepResult:
     rng = np.random.default_rng(seed)
     plant, dist = p.model.build(), PlantDisturbance.for_channels(1)
     drv = controller(heat_up)
     for name, value in p.supervision:
         drv.set(f"sPar.{name}", value)
     tune_from(drv, plant, dist, TS, p.tune_w, p.tune_timeout_s, NOISE_C, rng)
-    got = step_from_rest(drv, plant, dist, TS, p.rest_s, p.step_s, p.tune_w, p.step_w, noise=NOISE_C,
-                         seed=seed)
-    return Step(got.settling_s, got.overshoot_pct)
+    return step_from_rest(drv, plant, dist, TS, p.rest_s, p.step_s, p.tune_w, p.step_w, noise=NOISE_C,
+                          seed=seed)
 
 
 def _cases():

@@ -199,8 +199,9 @@ def build_card(sc: Scenario, executor: Executor, evals: int) -> Card:
     for name, ev in opt.start_evaluations.items():
         if ev.outcome is not None:
             rows.append(_row(name, ev.outcome, ev.gains, opt.model.ms))
+    cooling = tunes_cooling(sc.zones[0])
     for v, o in zip(sc.variants, outcomes, strict=True):
-        rows.append(variant_row(v, o, opt.model.ms, cooling=tunes_cooling(sc.zones[0])))
+        rows.append(variant_row(v, o, opt.model.ms, cooling=cooling))
     best_iae = rows[1].iae if best.best.outcome is not None and len(rows) > 1 else math.nan
     if card.bound is None:
         best_iae = rows[0].iae if rows and rows[0].outcome is not None else math.nan

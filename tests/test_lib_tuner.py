@@ -140,17 +140,19 @@ def identified(drv: ScanDriver) -> dict[str, float]:
 
 
 @pytest.mark.parametrize(
-    ("k", "t", "l", "w", "dy", "expected_rule"),
+    ("k", "t", "l", "w", "dy", "tau_lag", "expected_rule"),
     [
-        (0.9, 100.0, 10.0, 80.0, 100.0, RULE_SIMC),        # lag dominated (hot end / bed like), tau = 0.09
-        (2.0, 23.4, 10.6, 100.0, 50.0, RULE_AMIGO),        # seed 003 nozzle T and L, tau = 0.31
-        (1.0, 20.0, 30.0, 70.0, 100.0, RULE_AMIGO),        # delay dominated, tau = 0.6
+        (0.9, 100.0, 10.0, 80.0, 100.0, 0.0, RULE_AMIGO),   # lag dominated (hot end / bed like), tau = 0.09
+        (0.9, 100.0, 10.0, 80.0, 100.0, 0.1, RULE_SIMC),    # ... below a fTauLagDominated the user set
+        (2.0, 23.4, 10.6, 100.0, 50.0, 0.1, RULE_AMIGO),    # seed 003 nozzle T and L, tau = 0.31
+        (1.0, 20.0, 30.0, 70.0, 100.0, 0.0, RULE_AMIGO),    # delay dominated, tau = 0.6
     ],
 )
 @pytest.mark.parametrize("ms_max", [0.0, MS_MAX], ids=["formula", "ms-limited"])
-def test_fopdt_identified_within_10_percent_and_auto_rule(uut, k, t, l, w, dy, expected_rule, ms_max) -> None:
+def test_fopdt_identified_within_10_percent_and_auto_rule(uut, k, t, l, w, dy, tau_lag, expected_rule,
+                                                          ms_max) -> None:
     plant = Fopdt(k=k, t=t, l=l)
-    run_tune(uut, plant, w=w, y_tune=dy, extra={"fTuneMsMax": ms_max})
+    run_tune(uut, plant, w=w, y_tune=dy, extra={"fTuneMsMax": ms_max, "fTauLagDominated": tau_lag})
     assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
     assert uut.get("nState") == STATE_TUNED
     got = identified(uut)
@@ -560,3 +562,29 @@ def test_a_zone_still_settling_from_its_last_run_still_tunes(uut) -> None:
     rise = uut.get("fbUut.fbTuner.fRise")
     print(f"drift {drift:.3f} degC/s, record {record:.1f} s, rise {rise:.1f} degC")
     assert drift * record > 0.1 * rise, "the rest did not drift enough to tell the two readings apart"
+
+
+@pytest.mark.parametrize("kp_limit", [2.5, 0.0], ids=["noise-limited", "limit-off"])
+def test_a_noise_limited_set_is_simc_pi_whatever_rule_auto_picked(uut, kp_limit) -> None:
+    """AUTO picks AMIGO here (fTauLagDominated 0); with the noise limit the Kp it can afford is far below
+    AMIGO's, and the set written is SIMC PI for that slower loop: Kp = fTuneNoiseKpOutput / filtered noise,
+    tau_c = Tg / (Ks Kp) - Tu, Tn = min(Tg + Tu/3, 4 (tau_c + Tu)), no derivative."""
+    plant = Fopdt(k=0.9, t=100.0, l=10.0, noise=1.0, rng=random.Random(3))
+    run_tune(uut, plant, w=80.0, extra={"fTauLagDominated": 0.0, "fTuneNoiseKpOutput": kp_limit})
+    assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
+    got = identified(uut)
+    if not kp_limit:
+        assert uut.get("nRuleUsed") == RULE_AMIGO
+        assert got["fTv"] > 0.0
+        return
+    assert uut.get("nRuleUsed") == RULE_SIMC
+    assert (got["fTv"], got["fTd"]) == (0.0, 0.0)
+    tf = uut.get("sPar.fTFilterTuned")
+    a = TS / (tf + TS)
+    noise_filtered = uut.get("fbUut.fbTuner.fNoise") * math.sqrt(a / (2.0 - a))
+    assert got["fKp"] == pytest.approx(kp_limit / noise_filtered, rel=1e-3)
+    amigo_kp = rule_values(RULE_AMIGO, got["fKs"], got["fTu"], got["fTg"], got["fVmax"], 100.0)[0]
+    assert got["fKp"] < amigo_kp
+    tau_c = got["fTg"] / (got["fKs"] * got["fKp"]) - got["fTu"]
+    simc_tn = min(got["fTg"] + got["fTu"] / 3.0, 4.0 * (tau_c + got["fTu"]))
+    assert got["fTn"] == pytest.approx(simc_tn, rel=1e-3)

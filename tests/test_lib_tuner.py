@@ -131,7 +131,8 @@ def rule_values(rule: int, ks: float, tu: float, tg: float, vmax: float, dy: flo
     return tg / (ks * (tauc + tu)), min(tg + tu / 3, 4 * (tauc + tu)), 0.0, 0.0
 
 
-DETUNE_FACTOR, MS_MAX = 0.9, 2.0  # FC_ApplyTuningRule's Kp step; a robustness limit for fTuneMsMax
+DETUNE_FACTOR, MS_MAX = 0.95, 2.0  # FC_ApplyTuningRule's Kp step; a robustness limit for fTuneMsMax
+MS_DEFAULT = 1.6  # fTuneMsMax's default
 
 
 def identified(drv: ScanDriver) -> dict[str, float]:
@@ -148,7 +149,7 @@ def identified(drv: ScanDriver) -> dict[str, float]:
         (1.0, 20.0, 30.0, 70.0, 100.0, 0.0, RULE_AMIGO),    # delay dominated, tau = 0.6
     ],
 )
-@pytest.mark.parametrize("ms_max", [0.0, MS_MAX], ids=["formula", "ms-limited"])
+@pytest.mark.parametrize("ms_max", [0.0, MS_DEFAULT, MS_MAX], ids=["formula", "default-ms", "ms-limited"])
 def test_fopdt_identified_within_10_percent_and_auto_rule(uut, k, t, l, w, dy, tau_lag, expected_rule,
                                                           ms_max) -> None:
     plant = Fopdt(k=k, t=t, l=l)
@@ -162,21 +163,31 @@ def test_fopdt_identified_within_10_percent_and_auto_rule(uut, k, t, l, w, dy, t
     assert got["fTauNorm"] == pytest.approx(got["fTu"] / (got["fTu"] + got["fTg"]), rel=1e-4)
     assert uut.get("nRuleUsed") == expected_rule
     want = rule_values(expected_rule, got["fKs"], got["fTu"], got["fTg"], got["fVmax"], dy)
-    assert [got["fTn"], got["fTv"], got["fTd"]] == pytest.approx(want[1:], rel=1e-3, abs=1e-6)
+    steps = round(math.log(got["fKp"] / want[0]) / math.log(DETUNE_FACTOR))
+    assert got["fKp"] == pytest.approx(want[0] * DETUNE_FACTOR**steps, rel=1e-3)
+
+    def tn_at(kp: float) -> float:
+        """The rule's Tn; SIMC's follows the tau_c a detuned Kp means."""
+        if expected_rule != RULE_SIMC:
+            return want[1]
+        tau_c = got["fTg"] / (got["fKs"] * kp) - got["fTu"]
+        return min(got["fTg"] + got["fTu"] / 3.0, 4.0 * (tau_c + got["fTu"]))
+
+    assert [got["fTn"], got["fTv"], got["fTd"]] == pytest.approx([tn_at(got["fKp"]), *want[2:]], rel=1e-3,
+                                                                 abs=1e-6)
     # the robustness of the proposed set, on the model the tuner identified, is published with it
     model = (got["fKs"], got["fTu"], got["fTg"])
     ms = reference_ms(*model, got["fKp"], got["fTn"], got["fTv"], got["fTd"])
     assert got["fMsTuned"] == pytest.approx(ms, rel=0.02)
-    steps = round(math.log(got["fKp"] / want[0]) / math.log(DETUNE_FACTOR))
-    assert got["fKp"] == pytest.approx(want[0] * DETUNE_FACTOR**steps, rel=1e-3)
     if not ms_max:
         assert steps == 0  # the rule's formula as documented
     else:
-        # AUTO with fTuneMsMax proposes no fragile set: Kp in steps of 0.9 down to Ms <= 2, not a step further
+        # AUTO with fTuneMsMax proposes nothing less robust: Kp in steps of 0.95 down to Ms <= fTuneMsMax,
+        # not a step further
         assert ms <= ms_max * 1.02
         if steps:
             kp_up = got["fKp"] / DETUNE_FACTOR
-            assert reference_ms(*model, kp_up, got["fTn"], got["fTv"], got["fTd"]) > ms_max * 0.98
+            assert reference_ms(*model, kp_up, tn_at(kp_up), got["fTv"], got["fTd"]) > ms_max * 0.98
     print(f"K {k} T {t} L {l}, fTuneMsMax {ms_max}: rule {expected_rule}, Kp {got['fKp']:.3g}, "
           f"Ms {got['fMsTuned']:.2f} on the identified model")
 

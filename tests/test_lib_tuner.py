@@ -479,7 +479,9 @@ def filter_time(kp: float, noise_pp: float, goal_pp: float, cycle: float, tu: fl
                          ids=["sized", "at-the-lag-bound", "not-needed"])
 def test_tune_sizes_the_actual_value_filter_from_the_measured_noise(uut, noise, share) -> None:
     plant = Fopdt(k=0.9, t=100.0, l=10.0, noise=noise, rng=random.Random(3))
-    run_tune(uut, plant, w=80.0, extra={"fTuneFilterLagShare": share})
+    # the filter is sized for the rule's Kp; fTuneMsMax off keeps that Kp in the set (the detuning after it
+    # is the auto-rule test's)
+    run_tune(uut, plant, w=80.0, extra={"fTuneFilterLagShare": share, "fTuneMsMax": 0.0})
     assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
     got = identified(uut)
     noise_pp = uut.get("fbUut.fbTuner.fNoise")

@@ -2,11 +2,12 @@
 
 A hot end's 12-bit NTC resolves about 0.23 degC near 240 degC, and every 0.1 s the switch comes late at
 full power is about 0.09 degC of overshoot on RepRapFirmware's default hot end (T1). The plan is measured
-from X0, so X0 is the filtered X at rest, not one sample a count off; the dead time is the mean over the
-early rise (up to a tenth of the step) of each call's t less the model's time for its rise, not the one
-call X crossed a threshold; and the time constant seen is taken from a slope filter whose start at rest is
-accounted for. On each of five noise draws the step stays within the nominal goals (one count is 0.58 %
-of the step), where the plan from one sample and one crossing left 0.53-0.54 % on three of them.
+from X0, so X0 is the filtered X at rest, not one sample a count off; the dead time is where the
+least-squares line through the early rise (up to a fifth of the step) of the model's time for each call's
+rise crosses zero, not the one call X crossed a threshold; and the time constant seen is taken from a slope
+filter whose start at rest is accounted for. On each of five noise draws the step stays within the nominal
+goals (one count is 0.58 % of the step), where the plan from one sample and one crossing left 0.53-0.54 %
+on three of them.
 """
 
 from __future__ import annotations

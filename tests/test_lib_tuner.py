@@ -127,8 +127,14 @@ def rule_values(rule: int, ks: float, tu: float, tg: float, vmax: float, dy: flo
     if rule == RULE_AMIGO:  # Astrom & Hagglund 2004
         tv = 0.5 * tu * tg / (0.3 * tu + tg)
         return (0.2 + 0.45 * tg / tu) / ks, tu * (0.4 * tu + 0.8 * tg) / (tu + 0.1 * tg), tv, c_td * tv
-    tauc = tauc_factor * tu
-    return tg / (ks * (tauc + tu)), min(tg + tu / 3, 4 * (tauc + tu)), 0.0, 0.0
+    kp = tg / (ks * (tauc_factor * tu + tu))
+    return kp, simc_tn(kp, ks, tu, tg), 0.0, 0.0
+
+
+def simc_tn(kp: float, ks: float, tu: float, tg: float) -> float:
+    """SIMC's Tn = min(Tg + Tu/3, 4 (tau_c + Tu)) for the closed-loop time constant tau_c a PI's Kp means,
+    Kp = Tg / (Ks (tau_c + Tu))."""
+    return min(tg + tu / 3, 4 * tg / (ks * kp))
 
 
 DETUNE_FACTOR, MS_MAX = 0.95, 2.0  # FC_ApplyTuningRule's Kp step; a robustness limit for fTuneMsMax
@@ -163,20 +169,17 @@ def test_fopdt_identified_within_10_percent_and_auto_rule(uut, k, t, l, w, dy, t
     assert got["fTauNorm"] == pytest.approx(got["fTu"] / (got["fTu"] + got["fTg"]), rel=1e-4)
     assert uut.get("nRuleUsed") == expected_rule
     want = rule_values(expected_rule, got["fKs"], got["fTu"], got["fTg"], got["fVmax"], dy)
+    model = (got["fKs"], got["fTu"], got["fTg"])
     steps = round(math.log(got["fKp"] / want[0]) / math.log(DETUNE_FACTOR))
     assert got["fKp"] == pytest.approx(want[0] * DETUNE_FACTOR**steps, rel=1e-3)
 
     def tn_at(kp: float) -> float:
         """The rule's Tn; SIMC's follows the tau_c a detuned Kp means."""
-        if expected_rule != RULE_SIMC:
-            return want[1]
-        tau_c = got["fTg"] / (got["fKs"] * kp) - got["fTu"]
-        return min(got["fTg"] + got["fTu"] / 3.0, 4.0 * (tau_c + got["fTu"]))
+        return simc_tn(kp, *model) if expected_rule == RULE_SIMC else want[1]
 
     assert [got["fTn"], got["fTv"], got["fTd"]] == pytest.approx([tn_at(got["fKp"]), *want[2:]], rel=1e-3,
                                                                  abs=1e-6)
     # the robustness of the proposed set, on the model the tuner identified, is published with it
-    model = (got["fKs"], got["fTu"], got["fTg"])
     ms = reference_ms(*model, got["fKp"], got["fTn"], got["fTv"], got["fTd"])
     assert got["fMsTuned"] == pytest.approx(ms, rel=0.02)
     if not ms_max:
@@ -598,6 +601,4 @@ def test_a_noise_limited_set_is_simc_pi_whatever_rule_auto_picked(uut, kp_limit)
     assert got["fKp"] == pytest.approx(kp_limit / noise_filtered, rel=1e-3)
     amigo_kp = rule_values(RULE_AMIGO, got["fKs"], got["fTu"], got["fTg"], got["fVmax"], 100.0)[0]
     assert got["fKp"] < amigo_kp
-    tau_c = got["fTg"] / (got["fKs"] * got["fKp"]) - got["fTu"]
-    simc_tn = min(got["fTg"] + got["fTu"] / 3.0, 4.0 * (tau_c + got["fTu"]))
-    assert got["fTn"] == pytest.approx(simc_tn, rel=1e-3)
+    assert got["fTn"] == pytest.approx(simc_tn(got["fKp"], got["fKs"], got["fTu"], got["fTg"]), rel=1e-3)

@@ -62,9 +62,10 @@ def pid() -> ScanDriver:
 
 
 def configure(drv: ScanDriver, kp: float, tn: float, tv: float, td: float,
-              ymin: float = -100.0, ymax: float = 100.0, ipart_only: bool = False) -> None:
+              ymin: float = -100.0, ymax: float = 100.0, ipart_only: bool = False,
+              weight: float = 1.0) -> None:
     for name, value in (("fKp", kp), ("fTn", tn), ("fTv", tv), ("fTd", td), ("fYMin", ymin),
-                        ("fYMax", ymax), ("fCycleTime", TS)):
+                        ("fYMax", ymax), ("fCycleTime", TS), ("fSetpointWeight", weight)):
         drv.set(f"fbPid.{name}", value)
     drv.set("fbPid.bARWOnIPartOnly", ipart_only)
     drv.set("fbPid.bSync", False)

@@ -22,6 +22,8 @@ BLOCK_TEMPLATE = HERE / "FB_TempZone.st.in"
 BLOCK = HERE.parents[1] / "st_lib" / "registers" / "FB_TempZone.st"
 LINE_WIDTH = 116
 MD_ZONE, MW_ZONE, FUZZY_MD, FUZZY_MD_ZONE, FUZZY_COIL_BYTE = 100, 20, 200, 50, 4
+EXT_MD, EXT_MD_ZONE = 300, 50  # the zone's second block of 32-bit registers, after the fuzzy adapter's
+PARAM_MD = ("md", "ext_md")
 META_KEYS = ("unit", "min", "max", "default", "dec", "enum", "owner", "group")
 
 
@@ -74,6 +76,8 @@ def location(row: dict[str, str], z: Zone) -> str:
         return f"%QX{z.n - 1 + 2 * (off // 8)}.{off % 8}"
     if sec == "fuzzy_md":
         return f"%MD{FUZZY_MD + FUZZY_MD_ZONE * (z.n - 1) + off}"
+    if sec == "ext_md":
+        return f"%MD{EXT_MD + EXT_MD_ZONE * (z.n - 1) + off}"
     if sec == "fuzzy_coil":
         return f"%QX{FUZZY_COIL_BYTE}.{off + z.n - 1}"
     raise ValueError(f"{TABLE.name}: unknown section {sec!r} of {row['name']}")
@@ -98,7 +102,7 @@ def sync_block(row: dict[str, str]) -> str:
 
 
 def param_defaults(table: list[dict[str, str]], z: Zone) -> str:
-    params = rows_of(table, z, "md") + [r for r in rows_of(table, z, "coil") if r["default"]]
+    params = rows_of(table, z, *PARAM_MD) + [r for r in rows_of(table, z, "coil") if r["default"]]
     return ", ".join(f"{wire(r)[1]} := {st_literal(zone_default(r, z), r['type'])}"
                      for r in params if wire(r)[0] in ("param", "cfg") and r["type"] == "REAL")
 
@@ -109,9 +113,9 @@ def zone_init(table: list[dict[str, str]], z: Zone) -> list[str]:
     lines = [f"    nModeZone{n} := 0;"]
     # MatIEC refuses DWORD and BOOL values in a structure initialiser: these start here instead
     lines += [f"    sParZone{n}.{wire(r)[1]} := {st_literal(zone_default(r, z), r['type'])};"
-              for r in rows_of(table, z, "md") if wire(r)[0] == "param" and r["type"] == "DWORD"]
+              for r in rows_of(table, z, *PARAM_MD) if wire(r)[0] == "param" and r["type"] == "DWORD"]
     kept = []
-    for r in rows_of(table, z, "md", "mw", "coil"):
+    for r in rows_of(table, z, *PARAM_MD, "mw", "coil"):
         if r["owner"] != "client" or not r["default"] or wire(r)[0] == "param" or r["name"] == "nMode":
             continue
         assign = f"{r['name']}Zone{n} := {st_literal(zone_default(r, z), r['type'])};"
@@ -138,12 +142,13 @@ def fills(table: list[dict[str, str]]) -> dict[str, list[str]]:
             status.append(f"  {name} := fbFuzzy.{field};")
         elif kind == "out":
             status.append(f"  {name} := fbCtrl.{field};")
-        elif kind in ("inuse", "param", "cfg") and r["section"] in ("md", "coil"):
+        elif kind in ("inuse", "param", "cfg") and r["section"] in (*PARAM_MD, "coil"):
             status.append(f"  {name} := fbCtrl.sValid.{field};")
         if kind == "fuzzy_param" and field != name:
             show.append(f"    {name} := sFuzzyPar.{field};")
             apply.append(f"    sFuzzyPar.{field} := {name};")
-    written = [f"{sync_block(r)}.bWritten" for r in rows if wire(r)[0] == "param" and r["section"] == "md"]
+    written = [f"{sync_block(r)}.bWritten" for r in rows
+               if wire(r)[0] == "param" and r["section"] in PARAM_MD]
     return {
         "SYNC": sync, "STATUS": status, "FUZZY_SHOW": show, "FUZZY_APPLY": apply,
         "WRITTEN": [f"  bWritten := {written[0]}", *(f"    OR {w}" for w in written[1:-1]),
@@ -199,7 +204,7 @@ def zone_decls(table: list[dict[str, str]], z: Zone) -> tuple[list[str], list[st
     """(located declarations, internal declarations) of zone z."""
     loc = [f"    (* ---- zone {z.n}: {z.title} ---- *)"]
     loc += [declaration(r, f"{r['name']}Zone{z.n}", location(r, z), z)
-            for r in rows_of(table, z, "md", "mw", "iw", "coil", "fuzzy_md", "fuzzy_coil")]
+            for r in rows_of(table, z, "md", "mw", "iw", "coil", "fuzzy_md", "fuzzy_coil", "ext_md")]
     internal = [f"    sParZone{z.n} : ST_ControllerParameter := ({param_defaults(table, z)});",
                 f"    fbZone{z.n} : FB_TempZone;"]
     return loc, internal

@@ -131,6 +131,11 @@ def rule_values(rule: int, ks: float, tu: float, tg: float, vmax: float, dy: flo
     return kp, simc_tn(kp, ks, tu, tg), 0.0, 0.0
 
 
+def setpoint_weight(rule: int, tau: float) -> float:
+    """AMIGO's setpoint weight (Astrom & Hagglund): b = 0 up to tau = 0.5, 1 above; every other rule 1."""
+    return 0.0 if rule == RULE_AMIGO and tau <= 0.5 else 1.0
+
+
 def simc_tn(kp: float, ks: float, tu: float, tg: float) -> float:
     """SIMC's Tn = min(Tg + Tu/3, 4 (tau_c + Tu)) for the closed-loop time constant tau_c a PI's Kp means,
     Kp = Tg / (Ks (tau_c + Tu))."""
@@ -142,7 +147,8 @@ MS_GOAL = 1.6  # the robustness industrial practice asks, as fTuneMsMax
 
 
 def identified(drv: ScanDriver) -> dict[str, float]:
-    names = ("fKs", "fTu", "fTg", "fVmax", "fKp", "fTn", "fTv", "fTd", "fTauNorm", "fMsTuned")
+    names = ("fKs", "fTu", "fTg", "fVmax", "fKp", "fTn", "fTv", "fTd", "fTauNorm", "fMsTuned",
+             "fSetpointWeight")
     return {n: drv.get(f"sPar.{n}") for n in names}
 
 
@@ -179,6 +185,7 @@ def test_fopdt_identified_within_10_percent_and_auto_rule(uut, k, t, l, w, dy, t
 
     assert [got["fTn"], got["fTv"], got["fTd"]] == pytest.approx([tn_at(got["fKp"]), *want[2:]], rel=1e-3,
                                                                  abs=1e-6)
+    assert got["fSetpointWeight"] == setpoint_weight(expected_rule, got["fTauNorm"])
     # the robustness of the proposed set, on the model the tuner identified, is published with it
     ms = reference_ms(*model, got["fKp"], got["fTn"], got["fTv"], got["fTd"])
     assert got["fMsTuned"] == pytest.approx(ms, rel=0.02)
@@ -592,9 +599,10 @@ def test_a_noise_limited_set_is_simc_pi_whatever_rule_auto_picked(uut, kp_limit)
     if not kp_limit:
         assert uut.get("nRuleUsed") == RULE_AMIGO
         assert got["fTv"] > 0.0
+        assert got["fSetpointWeight"] == 0.0
         return
     assert uut.get("nRuleUsed") == RULE_SIMC
-    assert (got["fTv"], got["fTd"]) == (0.0, 0.0)
+    assert (got["fTv"], got["fTd"], got["fSetpointWeight"]) == (0.0, 0.0, 1.0)
     tf = uut.get("sPar.fTFilterTuned")
     a = TS / (tf + TS)
     noise_filtered = uut.get("fbUut.fbTuner.fNoise") * math.sqrt(a / (2.0 - a))

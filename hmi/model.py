@@ -40,6 +40,8 @@ PANEL_ROLES: dict[str, str] = {
     "td": "fTdZone{n}",
     "td_cool": "fTdCoolZone{n}",
     "tv_cool": "fTvCoolZone{n}",
+    "weight": "fSetpointWeightZone{n}",
+    "weight_cool": "fSetpointWeightCoolZone{n}",
     "kp_base": "fFuzzyKpBaseZone{n}",
     "tn_base": "fFuzzyTnBaseZone{n}",
     "tv_base": "fFuzzyTvBaseZone{n}",
@@ -62,13 +64,13 @@ PANEL_ROLES: dict[str, str] = {
 }
 FUZZY_RULES = 4  # fFuzzyRule<k>StrengthZone<n> / nFuzzyRule<k>Zone<n>, k = 1..FUZZY_RULES
 # the tuned set a reject restores (heating and cooling), in register order
-GAIN_SET_ROLES = ("kp", "tn", "tv", "td", "kp_cool", "tn_cool", "tv_cool", "td_cool")
+GAIN_SET_ROLES = ("kp", "tn", "tv", "td", "weight", "kp_cool", "tn_cool", "tv_cool", "td_cool", "weight_cool")
 MODE_BUTTONS = ("IDLE", "PASSIVE", "ACTIVE", "MANUAL", "TUNE", "RESET")
 # groups of the parameter page when a tag carries no `group` metadata: first name pattern that matches
 FALLBACK_GROUPS: tuple[tuple[str, str], ...] = (
     (r"fFuzzy|nFuzzy|bFuzzy", "fuzzy"),
-    (r"f(Kp|Tn|Tv|Td)Cool", "pid_cooling"),
-    (r"f(Kp|Tn|Tv|Td)Zone", "pid_heating"),
+    (r"f(Kp|Tn|Tv|Td|SetpointWeight)Cool", "pid_cooling"),
+    (r"f(Kp|Tn|Tv|Td|SetpointWeight)Zone", "pid_heating"),
     (r"fY(Min|Max)|fYOnFailure|nReaction", "limits"),
     (r"fPwm", "pwm"),
     (r"fSetpoint|fW|fTStartUp|bSelSetpoint|bEnableRamp|bEnableSoftStart", "setpoint"),

@@ -16,9 +16,9 @@ from plc.tuning_study import IAE_RATIO_GOAL, MS_GOAL, PLANTS, StudyPlant, StudyR
 
 ROBUST_MS = 2.0
 SHORTFALLS = {
-    "FOPDT tau 0.05": "below fTauLagDominated AUTO takes SIMC PI: AMIGO, which meets both goals here, is a "
-    "load design whose short Tn overshoots setpoint steps when the P part acts on the whole error, as "
-    "FB_CtrlPid's does (it has no setpoint weight)",
+    "FOPDT tau 0.05": "below fTauLagDominated AUTO takes SIMC PI: AMIGO meets both goals here, but even with "
+    "its setpoint weight b = 0 it takes a large saturating setpoint step on a hot end more slowly than SIMC "
+    "PI, and its derivative on a quantised sensor moves the heater several times as much",
 }
 LAG_DOMINATED_TAU = 0.1  # the library's fTauLagDominated default
 

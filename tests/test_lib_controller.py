@@ -134,3 +134,47 @@ def test_time_shim_counts_seconds() -> None:
     drv = ScanDriver(load_test_app(prog))
     drv.scan()
     assert drv.get("fSec") == pytest.approx(1.25)
+
+
+@pytest.mark.parametrize("cooling", [False, True], ids=["heating", "cooling"])
+def test_the_setpoint_weight_of_the_set_in_use_reaches_the_pid(uut: ScanDriver, cooling: bool) -> None:
+    """b = 0 on the set in use: a setpoint step moves the output by the integral step alone."""
+    sign = -1.0 if cooling else 1.0
+    for name, value in (("fYMin", -100.0), ("fKpCool", 2.0), ("fTnCool", 10.0),
+                        ("fSetpointWeight", 1.0 if cooling else 0.0),
+                        ("fSetpointWeightCool", 0.0 if cooling else 1.0)):
+        uut.set(f"sPar.{name}", value)
+    x = 50.0 - sign * 2.0  # an output of sign * 4 % and more: the set of that side is in use
+    y0 = scan(uut, ACTIVE, x, n=3, w1=50.0)
+    assert uut.get("fbUut.bCoolingSet") is cooling
+    y = scan(uut, ACTIVE, x, w1=50.0 + sign * 10.0)
+    step_i = 2.0 * TS / 10.0
+    assert y - y0 == pytest.approx(step_i * (sign * 2.0 + sign * 10.0), rel=1e-3)  # no P step of 20 %
+
+
+def test_amigo_weight_zero_cuts_the_overshoot_of_a_small_setpoint_step() -> None:
+    """Seed 003's hot end with its AMIGO set (reference/control.md): a 2 degC step overshoots far less with
+    b = 0 than with the setpoint on the whole P part, and both settle on W."""
+    from tests.test_lib_tuner import Fopdt
+
+    k, t, l = 0.5916, 23.4, 10.6
+    kp, tn, tv = (0.2 + 0.45 * t / l) / k, l * (0.4 * l + 0.8 * t) / (l + 0.1 * t), 0.5 * l * t / (0.3 * l + t)
+    peaks = {}
+    for weight in (1.0, 0.0):
+        drv = ScanDriver(load_test_app(controller_program()))
+        for name, value in (("fKp", kp), ("fTn", tn), ("fTv", tv), ("fTd", 0.25 * tv), ("fWatchPeriod", 0.0),
+                            ("fRunawayPeriod", 0.0), ("fSetpointWeight", weight)):
+            drv.set(f"sPar.{name}", value)
+        plant = Fopdt(k=k, t=t, l=l, x0=160.0, dt=TS)
+        w, xs = 160.0 + k * 50.0, []
+        for n in range(round(600 / TS)):
+            if n == round(300 / TS):
+                w += 2.0
+            y = scan(drv, ACTIVE, plant.x, w1=w)
+            plant.step(y)
+            xs.append(plant.x)
+        step = xs[round(300 / TS):]
+        assert step[-1] == pytest.approx(w, abs=0.01)
+        peaks[weight] = (max(step) - w) / 2.0 * 100.0
+    print(f"overshoot of a 2 degC step: b = 1 {peaks[1.0]:.1f} %, b = 0 {peaks[0.0]:.1f} %")
+    assert peaks[0.0] < 0.5 * peaks[1.0]

@@ -1,7 +1,8 @@
 """The model-based setpoint response through Modbus on the bench oven (scenario nlag_oven, four equal lags):
 TUNE identifies the n-lag model (order 4), and the step 100 -> 150 degC planned on it settles within 1.3x
 the bang-hold bound of the true plant with at most 0.5 % overshoot of the true temperature (the PV's peak
-may add the noise measured at rest), where the self-tuned PID alone overshoots by more than 5 %. The
+may add the noise measured at rest), where the self-tuned PID alone (AMIGO with its setpoint weight b = 0)
+takes more than twice as long. The
 hand-over from TUNE, the oven's lags still full of the step's heat, plans on the same model and the step's
 history: it peaks at most half as far past W as the PID alone does. With the oven's lags 30 % shorter or
 longer than TUNE saw (from the hand-over on), the heater monitor raises nothing, the step stays within the
@@ -22,7 +23,7 @@ SCENARIO = "nlag_oven"
 MODEL_BASED = "model-based PID"
 ORDER = 4
 BOUND_RATIO, OVERSHOOT_PCT = 1.3, 0.5
-PID_ALONE_OVERSHOOT_PCT = 5.0  # scorecard: the self-tuned PID alone, about 10 %
+PID_ALONE_SLOWER = 2.0  # the PID alone's 2 % settling time over the model-based response's
 HAND_OVER_SHARE = 0.5  # of the PID alone's peak past W after TUNE
 LAGS_AFTER_TUNE = (0.7, 1.3)  # the oven's lags after TUNE, times what TUNE saw
 SEEN_LAGS_TOLERANCE = 0.1  # the lags the response reports, share of the true ones
@@ -69,7 +70,7 @@ def test_the_oven_lands_on_its_identified_n_lag_model(harness):
     assert step["true_overshoot_pct"] <= OVERSHOOT_PCT
     assert step["overshoot_pct"] <= OVERSHOOT_PCT + noise_pct
     assert step["settling_time_2pct_s"] <= BOUND_RATIO * bound
-    assert pid_alone["overshoot_pct"] > PID_ALONE_OVERSHOOT_PCT
+    assert pid_alone["settling_time_2pct_s"] > PID_ALONE_SLOWER * step["settling_time_2pct_s"]
     pid_result = next(r for name, (r, _) in runs.items() if name != MODEL_BASED)
     planned, plain = _settle_peak(result) - w0, _settle_peak(pid_result) - w0
     print(f"hand-over from TUNE: peak {planned:.1f} degC past W (PID alone {plain:.1f})")

@@ -158,7 +158,8 @@ def test_amigo_weight_zero_cuts_the_overshoot_of_a_small_setpoint_step() -> None
     from tests.test_lib_tuner import Fopdt
 
     k, t, l = 0.5916, 23.4, 10.6
-    kp, tn, tv = (0.2 + 0.45 * t / l) / k, l * (0.4 * l + 0.8 * t) / (l + 0.1 * t), 0.5 * l * t / (0.3 * l + t)
+    kp = (0.2 + 0.45 * t / l) / k
+    tn, tv = l * (0.4 * l + 0.8 * t) / (l + 0.1 * t), 0.5 * l * t / (0.3 * l + t)
     peaks = {}
     for weight in (1.0, 0.0):
         drv = ScanDriver(load_test_app(controller_program()))

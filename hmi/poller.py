@@ -32,6 +32,7 @@ HISTORY_S = 600.0
 STORE_EVERY_S = 1.0
 READBACK_DELAY_S = 0.35  # let the PLC scan (and validate) a write before it is read back
 PARAM_ERROR_BIT = 16
+PARAM_ERROR_IDS = (1, 2, 3)  # FB_CtrlParamCheck's error ids: task cycle, control cycle, any other parameter
 LATENCY_WINDOW = 600
 
 
@@ -276,8 +277,9 @@ class Poller:
             word = int(shown.get(zm.tags.get("alarm", ""), 0) or 0)
             err = int(shown.get(zm.tags.get("error", ""), 0) or 0)
             was_set = words_before.get(z, 0) >> PARAM_ERROR_BIT & 1
-            # a latched bit from an earlier refusal stays until acknowledged: then the error id decides
-            if word >> PARAM_ERROR_BIT & 1 and (not was_set or err != 0):
+            # a latched bit from an earlier refusal stays until acknowledged: then the error id decides (an
+            # alarm reaction's id is no refusal; a value the PLC kept shows in the read-back above)
+            if word >> PARAM_ERROR_BIT & 1 and (not was_set or err in PARAM_ERROR_IDS):
                 why = self.error_text.get(err, f"error id {err}") if err else f"alarm bit {PARAM_ERROR_BIT}"
                 problems.append(f"zone {z}: parameter error ({why})")
         if problems:

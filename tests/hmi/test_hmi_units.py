@@ -144,6 +144,38 @@ def test_poller_reads_writes_and_audits_against_the_soft_plc(tmp_path) -> None:
     asyncio.run(scenario())
 
 
+def test_a_write_during_an_alarm_reaction_is_not_called_refused_by_a_latched_refusal(tmp_path) -> None:
+    """Alarm bit 16 still latched from a refused write, the zone in ERROR from an alarm reaction (error 20,
+    not a parameter error): a valid write is accepted, and a refused one is still caught by its read-back."""
+    from hmi.poller import Poller
+    from plc.bundle import bundle_text
+    from plc.runtime.server import SoftPlc
+
+    async def scenario() -> None:
+        model = load_model(load_register_map())
+        async with SoftPlc(bundle_text(), port=0) as plc:
+            poller = Poller(model, "127.0.0.1", plc.port, rate_hz=10)
+            poller.start()
+            for _ in range(50):
+                await asyncio.sleep(0.1)
+                if poller.diag.scan_count:
+                    break
+            assert not (await poller.write({"fYMinZone1": 100.0}, "engineer")).ok  # latches bit 16
+            await poller.write({"fPvZone1": 999.0, "nModeZone1": 2}, "engineer", verify=False)  # sensor open
+            for _ in range(50):
+                await asyncio.sleep(0.1)
+                if poller.values.get("nErrorIdZone1") == 20:
+                    break
+            assert poller.values.get("nErrorIdZone1") == 20
+            ok = await poller.write({"fSetpointZone1": 55.0}, "operator")
+            assert ok.ok, ok.message
+            refused = await poller.write({"fYMinZone1": 100.0}, "engineer")
+            assert not refused.ok and "the PLC keeps fYMinZone1" in refused.message
+            await poller.stop()
+
+    asyncio.run(scenario())
+
+
 def test_poller_reports_an_unreachable_plc(tmp_path) -> None:
     from hmi.poller import Poller
 

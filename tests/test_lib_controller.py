@@ -155,15 +155,14 @@ def test_the_setpoint_weight_of_the_set_in_use_reaches_the_pid(uut: ScanDriver, 
 def test_amigo_weight_zero_cuts_the_overshoot_of_a_small_setpoint_step() -> None:
     """Seed 003's hot end with its AMIGO set (reference/control.md): a 2 degC step overshoots far less with
     b = 0 than with the setpoint on the whole P part, and both settle on W."""
-    from tests.test_lib_tuner import Fopdt
+    from tests.test_lib_tuner import RULE_AMIGO, Fopdt, rule_values
 
     k, t, l = 0.5916, 23.4, 10.6
-    kp = (0.2 + 0.45 * t / l) / k
-    tn, tv = l * (0.4 * l + 0.8 * t) / (l + 0.1 * t), 0.5 * l * t / (0.3 * l + t)
+    kp, tn, tv, td = rule_values(RULE_AMIGO, k, l, t, vmax=0.0, dy=0.0)
     peaks = {}
     for weight in (1.0, 0.0):
         drv = ScanDriver(load_test_app(controller_program()))
-        for name, value in (("fKp", kp), ("fTn", tn), ("fTv", tv), ("fTd", 0.25 * tv), ("fWatchPeriod", 0.0),
+        for name, value in (("fKp", kp), ("fTn", tn), ("fTv", tv), ("fTd", td), ("fWatchPeriod", 0.0),
                             ("fRunawayPeriod", 0.0), ("fSetpointWeight", weight)):
             drv.set(f"sPar.{name}", value)
         plant = Fopdt(k=k, t=t, l=l, x0=160.0, dt=TS)

@@ -103,6 +103,14 @@ def test_tuning_and_fuzzy_robustness_registers_reach_the_panel() -> None:
         assert not {f"fFuzzyMsReachableZone{n}", f"fTFilterUsedZone{n}", f"fTuneNoisePpZone{n}"} & shown
 
 
+async def polled_until(predicate, tries: int = 50) -> None:
+    """Give the poller up to tries tenths of a second to make predicate true."""
+    for _ in range(tries):
+        await asyncio.sleep(0.1)
+        if predicate():
+            return
+
+
 def test_poller_reads_writes_and_audits_against_the_soft_plc(tmp_path) -> None:
     from hmi.poller import Poller
     from plc.bundle import bundle_text
@@ -120,10 +128,7 @@ def test_poller_reads_writes_and_audits_against_the_soft_plc(tmp_path) -> None:
 
             poller.listeners |= {lambda: pushed.append(poller.seq), broken}
             poller.start()
-            for _ in range(50):
-                await asyncio.sleep(0.1)
-                if len(poller.samples) >= 5 and poller.diag.scan_count:
-                    break
+            await polled_until(lambda: len(poller.samples) >= 5 and poller.diag.scan_count)
             assert poller.diag.connected and not poller.stale
             assert len(pushed) >= 5 and broken not in poller.listeners  # a failing page is dropped
             assert poller.diag.requests_per_cycle <= 8
@@ -156,16 +161,10 @@ def test_a_write_during_an_alarm_reaction_is_not_called_refused_by_a_latched_ref
         async with SoftPlc(bundle_text(), port=0) as plc:
             poller = Poller(model, "127.0.0.1", plc.port, rate_hz=10)
             poller.start()
-            for _ in range(50):
-                await asyncio.sleep(0.1)
-                if poller.diag.scan_count:
-                    break
+            await polled_until(lambda: poller.diag.scan_count)
             assert not (await poller.write({"fYMinZone1": 100.0}, "engineer")).ok  # latches bit 16
             await poller.write({"fPvZone1": 999.0, "nModeZone1": 2}, "engineer", verify=False)  # sensor open
-            for _ in range(50):
-                await asyncio.sleep(0.1)
-                if poller.values.get("nErrorIdZone1") == 20:
-                    break
+            await polled_until(lambda: poller.values.get("nErrorIdZone1") == 20)
             assert poller.values.get("nErrorIdZone1") == 20
             ok = await poller.write({"fSetpointZone1": 55.0}, "operator")
             assert ok.ok, ok.message

@@ -188,7 +188,9 @@ def zone_block(table: list[dict[str, str]]) -> tuple[str, list[dict[str, str]]]:
 def zone_call(table: list[dict[str, str]], z: Zone) -> list[str]:
     n, ports = z.n, zone_block(table)[1]
     args = ["bLoadStore := bLoadStore", "bStoreKept := bStoreKept", "nUnlockKeyValue := nUnlockKeyValue",
-            f"bNtcDivider := {'TRUE' if z.sensor == 'ntc' else 'FALSE'}", f"sPar := sParZone{n}"]
+            f"bNtcDivider := {'TRUE' if z.sensor == 'ntc' else 'FALSE'}",
+            "bNeighbourStep := " + " OR ".join(f"fbZone{o.n}.bStepping" for o in ZONES if o.n != n),
+            f"sPar := sParZone{n}"]
     args += [f"{r['name']} := {r['name']}Zone{n}" for r in ports if r["zones"] in ("", str(n))]
     lines, line = [], f"  fbZone{n}("
     for i, a in enumerate(args):

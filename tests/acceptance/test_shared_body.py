@@ -49,8 +49,9 @@ def test_zones_tuned_one_after_the_other_are_not_flagged(harness):
     tune1, hold1, _ = sc.zones[0].phases
     configure, wait, tune2, hold2 = sc.zones[1].phases
     short = {"duration_s": SHORT_HOLD_S}  # zone 1 holds on while zone 2 waits and tunes
-    ((result, _),) = run_scenario(harness, tclab([tune1, dataclasses.replace(hold1, **short)],
-                                                 [configure, wait, tune2, dataclasses.replace(hold2, **short)]))
+    zone1 = [tune1, dataclasses.replace(hold1, **short)]
+    zone2 = [configure, wait, tune2, dataclasses.replace(hold2, **short)]
+    ((result, _),) = run_scenario(harness, tclab(zone1, zone2))
     assert result.error is None, result.error
     for tr in result.zones:
         assert [ph.outcome for ph in tr.phases if ph.name == "tune"] == ["ok"], tr.name

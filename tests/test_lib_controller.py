@@ -178,3 +178,52 @@ def test_amigo_weight_zero_cuts_the_overshoot_of_a_small_setpoint_step() -> None
         peaks[weight] = (max(step) - w) / 2.0 * 100.0
     print(f"overshoot of a 2 degC step: b = 1 {peaks[1.0]:.1f} %, b = 0 {peaks[0.0]:.1f} %")
     assert peaks[0.0] < 0.5 * peaks[1.0]
+
+
+def step_response(kp: float, tn: float, weight: float, k: float, t: float, l: float, x_rest: float,
+                  dw: float, seconds: float) -> list[float]:
+    """X after a setpoint step of dw from rest at x_rest (ambient 25 degC), the PID at that rest."""
+    from tests.test_lib_tuner import Fopdt
+
+    drv = ScanDriver(load_test_app(controller_program()))
+    for name, value in (("fKp", kp), ("fTn", tn), ("fTv", 0.0), ("fTd", 0.0), ("fWatchPeriod", 0.0),
+                        ("fRunawayPeriod", 0.0), ("fSetpointWeight", weight), ("fWMax", 1000.0),
+                        ("fXMax", 2000.0), ("fTempAbsHigh", 2000.0)):
+        drv.set(f"sPar.{name}", value)
+    plant = Fopdt(k=k, t=t, l=l, x0=25.0, dt=TS)
+    plant.x = x_rest
+    plant.line.clear()
+    plant.line.extend([(x_rest - 25.0) / k] * round(l / TS))
+    drv.set("fbUut.fYManual", (x_rest - 25.0) / k)
+    scan(drv, MANUAL, plant.x, w1=x_rest)
+    for _ in range(round(10.0 / TS)):  # the bumpless hand-over, then at rest on W
+        plant.step(scan(drv, ACTIVE, plant.x, w1=x_rest))
+    xs = []
+    for _ in range(round(seconds / TS)):
+        plant.step(scan(drv, ACTIVE, plant.x, w1=x_rest + dw))
+        xs.append(plant.x)
+    return xs
+
+
+def test_simc_weight_takes_a_small_step_without_overshoot_and_a_saturating_one_as_fast() -> None:
+    """T1's hot end (K 3.4 degC/%, T 140 s, L 5.5 s) with SIMC PI and the weight SIMC writes: a 5 degC step,
+    which leaves the output off its limit, overshoots by about a fifth with b = 1 and hardly at all with
+    the weight, and settles sooner; a 40 degC step saturates the output, and the weight's filter restarts
+    at the limit, so it rises exactly as with b = 1."""
+    from tests.test_lib_tuner import RULE_SIMC, rule_values, setpoint_weight
+
+    k, t, l = 3.4, 140.0, 5.5
+    kp, tn, _, _ = rule_values(RULE_SIMC, k, l, t, vmax=0.0, dy=0.0)
+    weight = setpoint_weight(RULE_SIMC, l / (l + t), tn, t)
+    assert 0.7 < weight < 0.85
+    small = {b: step_response(kp, tn, b, k, t, l, 200.0, 5.0, 200.0) for b in (1.0, weight)}
+    overshoot = {b: (max(xs) - 205.0) / 5.0 * 100.0 for b, xs in small.items()}
+    settled = {b: TS * (1 + max(i for i, x in enumerate(xs) if abs(x - 205.0) > 0.1)) for b, xs in small.items()}
+    print(f"5 degC step: b = 1 {overshoot[1.0]:.1f} % / {settled[1.0]:.0f} s, "
+          f"b = {weight:.2f} {overshoot[weight]:.2f} % / {settled[weight]:.0f} s")
+    assert overshoot[1.0] > 15.0
+    assert overshoot[weight] < 1.5
+    assert settled[weight] < 0.5 * settled[1.0]
+    large = {b: step_response(kp, tn, b, k, t, l, 200.0, 40.0, 150.0) for b in (1.0, weight)}
+    assert max(large[1.0]) < 240.0 * 1.01
+    assert large[weight] == pytest.approx(large[1.0], abs=1e-3)

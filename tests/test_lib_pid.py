@@ -274,3 +274,25 @@ def test_a_non_finite_weight_changes_no_state(pid: ScanDriver) -> None:
     assert pid.get("fbPid.bInputError") is True
     assert pid.get("fbPid.fI") == i
     pid.set("fbPid.fSetpointWeight", 1.0)
+
+
+def test_a_step_that_saturates_even_its_weighted_p_part_leaves_the_limit_as_with_b_one(pid: ScanDriver) -> None:
+    """At the limit the weight changes nothing the plant sees, and its filter restarts at W: once X comes
+    close the output is the b = 1 output, not one still holding back (1 - b) of the step for a Tn."""
+    xs = [20.0 + 0.5 * k for k in range(200)] + [119.5] * 50
+    runs = {}
+    for weight in (1.0, 0.4):
+        configure(pid, kp=4.0, tn=20.0, tv=0.0, td=0.0, ymin=0.0, ymax=100.0, weight=weight)
+        run(pid, 20.0, [20.0] * 3)
+        runs[weight] = run(pid, 120.0, xs)
+    assert runs[0.4][0] == 100.0 and min(runs[1.0]) < 100.0
+    assert runs[0.4] == pytest.approx(runs[1.0], rel=REL, abs=1e-4)
+
+
+def test_a_step_that_saturates_only_the_whole_p_part_keeps_its_weight(pid: ScanDriver) -> None:
+    kp, tn, dw, weight = 2.0, 20.0, 40.0, 0.4  # b = 1 would ask 80 % + I above the 50 % limit
+    configure(pid, kp=kp, tn=tn, tv=0.0, td=0.0, ymin=0.0, ymax=50.0, weight=weight)
+    y0 = run(pid, 20.0, [20.0] * 3)[-1]
+    ys = run(pid, 20.0 + dw, [20.0] * 5)
+    expected = [y0 + kp * weight * dw + kp * TS / tn * dw * k for k in range(1, 6)]
+    assert ys == pytest.approx(expected, rel=REL, abs=1e-4)

@@ -131,9 +131,17 @@ def rule_values(rule: int, ks: float, tu: float, tg: float, vmax: float, dy: flo
     return kp, simc_tn(kp, ks, tu, tg), 0.0, 0.0
 
 
-def setpoint_weight(rule: int, tau: float) -> float:
-    """AMIGO's setpoint weight (Astrom & Hagglund): b = 0 up to tau = 0.5, 1 above; every other rule 1."""
-    return 0.0 if rule == RULE_AMIGO and tau <= 0.5 else 1.0
+SIMC_WEIGHT_0, SIMC_WEIGHT_SLOPE = 0.69, 0.27  # SIMC's b with Tn cut below Tg: 1 % overshoot on the model
+
+
+def setpoint_weight(rule: int, tau: float, tn: float, tg: float) -> float:
+    """AMIGO's setpoint weight (Astrom & Hagglund): b = 0 up to tau = 0.5, 1 above; SIMC's: 1 with Tn >= Tg,
+    else 0.69 + 0.27 Tn/Tg (at most 1); CHR and Cohen-Coon 1."""
+    if rule == RULE_AMIGO:
+        return 0.0 if tau <= 0.5 else 1.0
+    if rule == RULE_SIMC and tn < tg:
+        return min(1.0, SIMC_WEIGHT_0 + SIMC_WEIGHT_SLOPE * tn / tg)
+    return 1.0
 
 
 def simc_tn(kp: float, ks: float, tu: float, tg: float) -> float:
@@ -185,7 +193,8 @@ def test_fopdt_identified_within_10_percent_and_auto_rule(uut, k, t, l, w, dy, t
 
     assert [got["fTn"], got["fTv"], got["fTd"]] == pytest.approx([tn_at(got["fKp"]), *want[2:]], rel=1e-3,
                                                                  abs=1e-6)
-    assert got["fSetpointWeight"] == setpoint_weight(expected_rule, got["fTauNorm"])
+    assert got["fSetpointWeight"] == pytest.approx(
+        setpoint_weight(expected_rule, got["fTauNorm"], got["fTn"], got["fTg"]), rel=1e-5)
     # the robustness of the proposed set, on the model the tuner identified, is published with it
     ms = reference_ms(*model, got["fKp"], got["fTn"], got["fTv"], got["fTd"])
     assert got["fMsTuned"] == pytest.approx(ms, rel=0.02)
@@ -602,7 +611,9 @@ def test_a_noise_limited_set_is_simc_pi_whatever_rule_auto_picked(uut, kp_limit)
         assert got["fSetpointWeight"] == 0.0
         return
     assert uut.get("nRuleUsed") == RULE_SIMC
-    assert (got["fTv"], got["fTd"], got["fSetpointWeight"]) == (0.0, 0.0, 1.0)
+    assert (got["fTv"], got["fTd"]) == (0.0, 0.0)
+    assert got["fSetpointWeight"] == pytest.approx(setpoint_weight(RULE_SIMC, 0.0, got["fTn"], got["fTg"]),
+                                                   rel=1e-5)
     tf = uut.get("sPar.fTFilterTuned")
     a = TS / (tf + TS)
     noise_filtered = uut.get("fbUut.fbTuner.fNoise") * math.sqrt(a / (2.0 - a))

@@ -64,9 +64,10 @@ def pid() -> ScanDriver:
 
 def configure(drv: ScanDriver, kp: float, tn: float, tv: float, td: float,
               ymin: float = -100.0, ymax: float = 100.0, ipart_only: bool = False,
-              weight: float = 1.0) -> None:
+              weight: float = 1.0, weight_min_step: float = 0.0) -> None:
     for name, value in (("fKp", kp), ("fTn", tn), ("fTv", tv), ("fTd", td), ("fYMin", ymin),
-                        ("fYMax", ymax), ("fCycleTime", TS), ("fSetpointWeight", weight)):
+                        ("fYMax", ymax), ("fCycleTime", TS), ("fSetpointWeight", weight),
+                        ("fWeightMinStep", weight_min_step)):
         drv.set(f"fbPid.{name}", value)
     drv.set("fbPid.bARWOnIPartOnly", ipart_only)
     drv.set("fbPid.bSync", False)
@@ -296,3 +297,32 @@ def test_a_step_that_saturates_only_the_whole_p_part_keeps_its_weight(pid: ScanD
     ys = run(pid, 20.0 + dw, [20.0] * 5)
     expected = [y0 + kp * weight * dw + kp * TS / tn * dw * k for k in range(1, 6)]
     assert ys == pytest.approx(expected, rel=REL, abs=1e-4)
+
+
+def test_a_weight_that_keeps_the_step_off_the_limit_holds_through_a_later_saturation(pid: ScanDriver) -> None:
+    """b = 0 (AMIGO's) keeps the setpoint out of P: the step's first output is the integral's, and when the
+    filtered setpoint later drives the output to the limit the weight still holds back the approach."""
+    xs = [20.0] * 100 + [20.0 + 0.25 * k for k in range(1, 399)] + [119.5] * 50
+    runs = {}
+    for weight in (1.0, 0.0):
+        configure(pid, kp=4.0, tn=20.0, tv=0.0, td=0.0, ymin=0.0, ymax=100.0, weight=weight)
+        run(pid, 20.0, [20.0] * 3)
+        runs[weight] = run(pid, 120.0, xs)
+    assert runs[0.0][0] < 100.0 and max(runs[0.0]) == 100.0
+    left = [k for k in range(1, len(xs)) if runs[0.0][k - 1] == 100.0 and runs[0.0][k] < 100.0]
+    assert left and left[0] < next(k for k, y in enumerate(runs[1.0]) if y < 100.0)
+
+
+def test_a_ramp_written_point_by_point_passes_the_weight_whole(pid: ScanDriver) -> None:
+    """Changes up to fWeightMinStep per call move the filtered setpoint with W: a ramp meets the whole P
+    part (through the filter it would trail by (1 - b) Tn times its rate), a larger change is a step."""
+    ramp = [20.0 + 0.2 * k for k in range(1, 101)]
+    runs = {}
+    for weight in (1.0, 0.5):
+        configure(pid, kp=2.0, tn=20.0, tv=0.0, td=0.0, weight=weight, weight_min_step=0.5)
+        run(pid, 20.0, [20.0] * 3)
+        runs[weight] = [run(pid, w, [20.0 + 0.2 * k])[0] for k, w in enumerate(ramp)]
+    assert runs[0.5] == pytest.approx(runs[1.0], rel=REL, abs=1e-4)
+    configure(pid, kp=2.0, tn=20.0, tv=0.0, td=0.0, weight=0.5, weight_min_step=0.5)
+    y0 = run(pid, 20.0, [20.0] * 3)[-1]
+    assert run(pid, 21.0, [20.0])[0] == pytest.approx(y0 + 2.0 * 0.5 * 1.0 + 2.0 * TS / 20.0 * 1.0, rel=REL)

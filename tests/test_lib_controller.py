@@ -218,7 +218,8 @@ def test_simc_weight_takes_a_small_step_without_overshoot_and_a_saturating_one_a
     assert 0.7 < weight < 0.85
     small = {b: step_response(kp, tn, b, k, t, l, 200.0, 5.0, 200.0) for b in (1.0, weight)}
     overshoot = {b: (max(xs) - 205.0) / 5.0 * 100.0 for b, xs in small.items()}
-    settled = {b: TS * (1 + max(i for i, x in enumerate(xs) if abs(x - 205.0) > 0.1)) for b, xs in small.items()}
+    settled = {b: TS * (1 + max(i for i, x in enumerate(xs) if abs(x - 205.0) > 0.1))
+               for b, xs in small.items()}
     print(f"5 degC step: b = 1 {overshoot[1.0]:.1f} % / {settled[1.0]:.0f} s, "
           f"b = {weight:.2f} {overshoot[weight]:.2f} % / {settled[weight]:.0f} s")
     assert overshoot[1.0] > 15.0

@@ -277,7 +277,7 @@ def test_a_non_finite_weight_changes_no_state(pid: ScanDriver) -> None:
     pid.set("fbPid.fSetpointWeight", 1.0)
 
 
-def test_a_step_that_saturates_even_its_weighted_p_part_leaves_the_limit_as_with_b_one(pid: ScanDriver) -> None:
+def test_a_step_that_saturates_its_weighted_p_part_leaves_the_limit_as_with_b_one(pid: ScanDriver) -> None:
     """At the limit the weight changes nothing the plant sees, and its filter restarts at W: once X comes
     close the output is the b = 1 output, not one still holding back (1 - b) of the step for a Tn."""
     xs = [20.0 + 0.5 * k for k in range(200)] + [119.5] * 50

@@ -5,24 +5,20 @@ from __future__ import annotations
 
 import pytest
 
-from tests.st_helpers import ScanDriver, controller_program, load_test_app
-from tests.test_lib_tuner import Fopdt
+from tests.st_helpers import ScanDriver
+from tests.test_lib_tuner import TS, Fopdt, tuner_driver
 
 IDLE, PASSIVE, ACTIVE, RESET, MANUAL, TUNE = 0, 1, 2, 3, 4, 5
 TUNE_IDLE, TUNE_STEP, TUNE_READY, TUNE_ERROR = 2, 3, 4, 5
 STATE_TUNED = 6
-TS = 0.1
 TUNE_SHARED_BIT = 1 << 23
 
 
 @pytest.fixture()
 def uut() -> ScanDriver:
-    drv = ScanDriver(load_test_app(controller_program()))
-    for name, value in (("fTaskCycleTime", TS), ("fCtrlCycleTime", TS), ("fYMin", 0.0), ("fYMax", 100.0),
-                        ("fWMax", 1000.0), ("fXMax", 2000.0), ("fTempAbsHigh", 2000.0),
-                        ("fWatchPeriod", 0.0), ("fRunawayPeriod", 0.0), ("fTuneTimeout", 5000.0),
-                        ("fFrozenTime", 0.0), ("fYTune", 100.0)):
-        drv.set(f"sPar.{name}", value)
+    """The tuner tests' controller, stepping its output by 100 % in a step test."""
+    drv = tuner_driver()
+    drv.set("sPar.fYTune", 100.0)
     return drv
 
 

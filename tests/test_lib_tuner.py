@@ -85,8 +85,8 @@ class Ramp:
         self.x += self.rate * TS
 
 
-@pytest.fixture()
-def uut() -> ScanDriver:
+def tuner_driver() -> ScanDriver:
+    """A controller for step tests: 0..100 % output, wide limits, no watch, runaway or frozen-PV check."""
     drv = ScanDriver(load_test_app(PROGRAM))
     for name, value in (("fTaskCycleTime", TS), ("fCtrlCycleTime", TS), ("fYMin", 0.0), ("fYMax", 100.0),
                         ("fWMax", 1000.0), ("fXMax", 2000.0), ("fTempAbsHigh", 2000.0),
@@ -94,6 +94,11 @@ def uut() -> ScanDriver:
                         ("fFrozenTime", 0.0)):  # noise-free sensor: no frozen-PV check
         drv.set(f"sPar.{name}", value)
     return drv
+
+
+@pytest.fixture()
+def uut() -> ScanDriver:
+    return tuner_driver()
 
 
 def run_tune(drv: ScanDriver, plant, w: float, y_tune: float = 100.0, rule: int = RULE_AUTO,

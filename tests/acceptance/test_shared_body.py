@@ -16,8 +16,7 @@ TUNE_SHARED_BIT = 1 << 23
 SHORT_HOLD_S = 20.0
 
 
-def tclab(zone1_phases, zone2_phases):
-    sc = load_scenario(resolve_scenario("t4_tclab"))
+def tclab(sc, zone1_phases, zone2_phases):
     z1, z2 = sc.zones
     return dataclasses.replace(sc, zones=[dataclasses.replace(z1, phases=zone1_phases),
                                           dataclasses.replace(z2, phases=zone2_phases)],
@@ -31,7 +30,7 @@ def test_zones_tuned_together_flag_their_models(harness):
     tune2_together = dataclasses.replace(tune2, writes={**configure.writes, **tune2.writes},
                                          setpoint_c=tune1.setpoint_c)
     short = {"duration_s": SHORT_HOLD_S}
-    ((result, _),) = run_scenario(harness, tclab([tune1, dataclasses.replace(hold1, **short)],
+    ((result, _),) = run_scenario(harness, tclab(sc, [tune1, dataclasses.replace(hold1, **short)],
                                                  [tune2_together, dataclasses.replace(hold2, **short)]))
     assert result.error is None, result.error
     for tr in result.zones:
@@ -51,7 +50,7 @@ def test_zones_tuned_one_after_the_other_are_not_flagged(harness):
     short = {"duration_s": SHORT_HOLD_S}  # zone 1 holds on while zone 2 waits and tunes
     zone1 = [tune1, dataclasses.replace(hold1, **short)]
     zone2 = [configure, wait, tune2, dataclasses.replace(hold2, **short)]
-    ((result, _),) = run_scenario(harness, tclab(zone1, zone2))
+    ((result, _),) = run_scenario(harness, tclab(sc, zone1, zone2))
     assert result.error is None, result.error
     for tr in result.zones:
         assert [ph.outcome for ph in tr.phases if ph.name == "tune"] == ["ok"], tr.name

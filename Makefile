@@ -14,9 +14,16 @@ $(STAMP): pyproject.toml
 run: $(STAMP)
 	$(VENV)/bin/thermost run
 
+# the suite over every core, each file on one worker in file order (some files share a running PLC whose
+# state carries from test to test); against a real PLC (THERMOST_PLC) in one process, as every acceptance
+# test drives that one PLC. The panel's browser tests run on their own afterwards: their stack runs
+# 20 x real time and needs the CPU it asks for.
+BROWSER_TESTS := tests/hmi/test_panel_browser.py
+TEST_WORKERS = $(if $(THERMOST_PLC),0,auto)
 test: $(STAMP) browser
 	$(VENV)/bin/ruff check .
-	$(VENV)/bin/pytest -q
+	$(VENV)/bin/pytest -q -n $(TEST_WORKERS) --dist loadfile --ignore=$(BROWSER_TESTS)
+	$(VENV)/bin/pytest -q $(BROWSER_TESTS)
 
 # the Modbus tests against the newest pymodbus release (pyproject pins the tested minor): a breaking
 # minor release shows here the day it appears; a second venv, the pin overridden

@@ -40,6 +40,7 @@ def test_reset_restores_parameters_and_clears_alarms(harness, one_plc):
         host, port = one_plc.split(":")
         async with PlcClient(host, int(port), harness.regmap) as client:
             active = harness.codes.modes["ACTIVE"]
+            await client.step(1)  # a PLC fresh from its start sets its registers in its first scan
             await client.write_tags({b["kp"]: 99.0, b["pv"]: -300.0, b["mode"]: active})
             await client.step(5)
             dirty = await client.read_tags([b["kp"], b["alarm"]])

@@ -45,3 +45,15 @@ def test_auto_tuning_is_robust_and_rejects_loads_like_the_best_rule(plant) -> No
     assert row.ms_on_own_model <= MS_GOAL
     assert row.ms <= MS_GOAL, f"{plant.label}: Ms {row.ms:.2f} > {MS_GOAL}"
     assert row.iae_ratio <= IAE_RATIO_GOAL, f"{plant.label}: IAE {row.iae_ratio:.2f} x the better reference"
+
+
+def test_the_docs_show_these_rows() -> None:
+    """docs/library.md's study table, from the rows the tests above computed in this process."""
+    from modbus_bridge import docfigures
+
+    page = docfigures.DOCS / "library.md"
+    (body,) = [b for name, b in docfigures.blocks(page.read_text(encoding="utf-8")) if name == "tuning-study"]
+    assert body == docfigures.PRODUCERS["tuning-study"]().rstrip("\n") + "\n", (
+        "docs/library.md: figures:tuning-study disagrees with the code: run `make docs`"
+    )
+

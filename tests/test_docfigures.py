@@ -29,14 +29,10 @@ def test_every_block_has_a_producer():
 CHECKED_BESIDE_THEIR_TESTS = {"tuning-study": "tests/test_lib_tuning_study.py"}
 
 
-def checked_here() -> list[tuple[str, str, str]]:
-    skip = docfigures.MEASURED | set(CHECKED_BESIDE_THEIR_TESTS)
-    return [b for b in all_blocks() if b[1] not in skip]
+CHECKED_HERE = [b for b in all_blocks() if b[1] not in docfigures.MEASURED | set(CHECKED_BESIDE_THEIR_TESTS)]
 
 
-@pytest.mark.parametrize(
-    ("page", "name", "body"), checked_here(), ids=[f"{b[0]}:{b[1]}" for b in checked_here()]
-)
+@pytest.mark.parametrize(("page", "name", "body"), CHECKED_HERE, ids=[f"{b[0]}:{b[1]}" for b in CHECKED_HERE])
 def test_block_is_current(page, name, body):
     assert body == docfigures.PRODUCERS[name]().rstrip("\n") + "\n", (
         f"docs/{page}: figures:{name} disagrees with the code: run `make docs`"

@@ -8,6 +8,7 @@ import pytest
 
 from modbus_bridge.optimise.experiment import PidGains
 from modbus_bridge.optimise.robustness import amigo, loop_model, operating_point, simc
+from modbus_bridge.plants import response
 from modbus_bridge.plants.response import (
     FopdtFit,
     PlantModel,
@@ -32,6 +33,25 @@ def test_bang_hold_bound_on_seed003():
     entry = 10.6 + 23.4 * np.log(k / (k - 39.2))
     assert b.settling_s == pytest.approx(entry, abs=0.11)
     assert b.overshoot_pct < 2.0
+
+
+@pytest.mark.parametrize(
+    "pm, y0, r",
+    [
+        (PlantModel("transfer_function", {"num": (0.6,), "den": (2338.0, 156.7, 1.0), "dead_time_s": 0.35,
+                                          "ambient_c": 21.0}), 45.0, 60.0),
+        (PlantModel("nlag", {"gain_c_per_pct": 2.0, "time_constant_s": 40.0, "order": 3, "dead_time_s": 2.0,
+                             "ambient_c": 25.0}), 120.0, 70.0),
+    ],
+    ids=["two_lags_heating", "n_lag_cooling"],
+)
+def test_the_superposed_bound_of_a_linear_plant_is_the_simulated_one(pm, y0, r, monkeypatch):
+    fast = bang_hold_bound(pm, y0, r, 0.1, 700.0)
+    monkeypatch.setattr(response, "_is_linear", lambda _plant: False)
+    slow = bang_hold_bound(pm, y0, r, 0.1, 700.0)
+    assert (fast.switch_s, fast.settling_s) == (slow.switch_s, slow.settling_s)
+    assert fast.overshoot_pct == pytest.approx(slow.overshoot_pct, abs=1e-9)
+    assert np.max(np.abs(fast.y - slow.y)) < 1e-9
 
 
 def test_numerical_frequency_response_matches_the_transfer_function():

@@ -10,6 +10,7 @@ Multi-channel plants: the other channels hold the same input as the channel unde
 from __future__ import annotations
 
 import cmath
+import copy
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -216,11 +217,20 @@ def _settling(t: np.ndarray, y: np.ndarray, y0: float, r: float) -> float:
     return float(t[outside[-1] + 1])
 
 
+def _is_linear(plant: Plant) -> bool:
+    """The kinds whose response to a sum of inputs is the sum of their responses (inputs within range)."""
+    return isinstance(plant, (Fopdt, Sopdt, _LtiPlant))
+
+
 def bang_hold_bound(pm: PlantModel, y0: float, r: float, dt: float, horizon_s: float) -> BangHold:
     """The fastest 2 % settling an output limited to the actuator range can give from rest at y0 to r:
     full power (or full cooling), then the holding power, switched at the best time (grid of dt). The other
     channels of a multi-channel plant keep the input that held the start; the holding power is the one
-    that holds r beside them."""
+    that holds r beside them.
+
+    A linear plant is simulated twice, at full and at holding power: the switch at step k adds the holding
+    response less the full-power one, both delayed by k (superposition, the same discrete model). Other
+    plants are simulated once per candidate switch time."""
     plant = pm.build()
     u0 = rest_input(pm, y0)
     ur = rest_input(pm, r, u_others=u0)
@@ -228,29 +238,39 @@ def bang_hold_bound(pm: PlantModel, y0: float, r: float, dt: float, horizon_s: f
     start = _Sim(pm, dt, start_c=y0)
     _settle(start, u0)
 
-    def trial(ts: float) -> tuple[float, np.ndarray, np.ndarray]:
-        import copy
+    def held(u: float) -> np.ndarray:
+        return copy.deepcopy(start).run(lambda _t: u, u0, horizon_s)
 
-        sim = copy.deepcopy(start)
-        y = sim.run(lambda t: u_full if t < ts - 1e-9 else ur, u0, horizon_s)
-        t = dt * np.arange(1, y.size + 1)
-        return _settling(t, y, y0, r), t, y
+    y_full = held(u_full)
+    t_grid = dt * np.arange(1, y_full.size + 1)
+    if _is_linear(plant):
+        change = held(ur) - y_full
+
+        def response(ts: float) -> np.ndarray:
+            k = min(y_full.size, max(0, math.ceil(ts / dt - 1e-9)))  # the first step run at the holding power
+            y = y_full.copy()
+            y[k:] += change[: y.size - k]
+            return y
+    else:
+        def response(ts: float) -> np.ndarray:
+            return copy.deepcopy(start).run(lambda t: u_full if t < ts - 1e-9 else ur, u0, horizon_s)
+
+    def trial(ts: float) -> float:
+        return _settling(t_grid, response(ts), y0, r)
 
     # the full-power response crossing r bounds the switch time from above
-    _, t_full, y_full = trial(horizon_s)
     reach = np.flatnonzero((y_full - r) * math.copysign(1.0, r - y0) >= 0.0)
-    t_max = float(t_full[reach[0]]) if reach.size else horizon_s
+    t_max = float(t_grid[reach[0]]) if reach.size else horizon_s
     coarse = np.arange(0.0, t_max + dt, max(dt, t_max / 60.0))
-    scores = [trial(ts)[0] for ts in coarse]
+    scores = [trial(ts) for ts in coarse]
     best = float(coarse[int(np.argmin(scores))])
     step = max(dt, t_max / 60.0)
     fine = np.arange(max(0.0, best - step), best + step + dt / 2, dt)
-    results = [(trial(ts)[0], ts) for ts in fine]
-    settle, ts = min(results)
-    _, t, y = trial(ts)
+    settle, ts = min((trial(ts), ts) for ts in fine)
+    y = response(ts)
     direction = math.copysign(1.0, r - y0)
     over = max(0.0, float(np.max((y - r) * direction))) / abs(r - y0) * 100.0
-    return BangHold(ts, settle, over, u_full, ur, t, y)
+    return BangHold(ts, settle, over, u_full, ur, t_grid, y)
 
 
 def pid_frequency_response(kp: float, tn: float, tv: float, td: float, omegas: np.ndarray) -> np.ndarray:

@@ -26,7 +26,10 @@ def test_every_block_has_a_producer():
 
 
 # checked beside the tests whose results they show, in the process that holds those results
-CHECKED_BESIDE_THEIR_TESTS = {"tuning-study": "tests/test_lib_tuning_study.py"}
+CHECKED_BESIDE_THEIR_TESTS = {
+    "tuning-study": "tests/test_lib_tuning_study.py",
+    "fuzzy-oracle": "tests/test_fuzzy_inference.py",
+}
 
 
 CHECKED_HERE = [b for b in all_blocks() if b[1] not in docfigures.MEASURED | set(CHECKED_BESIDE_THEIR_TESTS)]
@@ -52,3 +55,11 @@ def test_render_replaces_only_the_block(monkeypatch):
     assert docfigures.render(page) == expected
     with pytest.raises(KeyError, match="no producer"):
         docfigures.render("<!-- figures:nobody -->\n<!-- /figures:nobody -->\n")
+
+
+@pytest.mark.parametrize("name", sorted(CHECKED_BESIDE_THEIR_TESTS))
+def test_a_block_left_to_its_tests_is_checked_there(name):
+    checker = docfigures.ROOT / CHECKED_BESIDE_THEIR_TESTS[name]
+    assert f'docfigures.render(text, {{"{name}"}})' in checker.read_text(encoding="utf-8"), (
+        f"figures:{name} is left to {checker.name}, which does not check it"
+    )

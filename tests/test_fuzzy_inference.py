@@ -165,3 +165,14 @@ def test_dominant_rules_are_the_strongest(drv: ScanDriver) -> None:
     ]
     assert [g[0] for g in got] == pytest.approx([b[0] for b in best], abs=1e-6)
     assert {(g[1], g[2]) for g in got} == {(b[1], b[2]) for b in best}
+
+
+def test_the_docs_show_these_deviations() -> None:
+    """docs/fuzzy.md's oracle table, from the deviations the tests above computed in this process."""
+    from modbus_bridge import docfigures
+
+    text = (docfigures.DOCS / "fuzzy.md").read_text(encoding="utf-8")
+    assert "<!-- figures:fuzzy-oracle -->" in text
+    assert docfigures.render(text, {"fuzzy-oracle"}) == text, (
+        "docs/fuzzy.md: figures:fuzzy-oracle disagrees with the code: run `make docs`"
+    )

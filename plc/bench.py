@@ -6,7 +6,7 @@
 2. wall time of 6,000 stepped scans with one Modbus write and one read per scan over
    loopback (soft-PLC in a separate process, as a harness sees it), in three request styles;
 3. figures of the other packages: `modbus_bridge.bench.run(quick)`, `plc.bench_adapter.run(quick)`,
-   `plc.bench_heatup.run(quick)`, `plc.tuning_study.run(quick)`.
+   `plc.bench_heatup.run(quick)`, `plc.bench_tunefit.run(quick)`, `plc.tuning_study.run(quick)`.
 """
 
 from __future__ import annotations
@@ -38,7 +38,9 @@ STOP_TIMEOUT_S = 10
 OUTPUT_WORDS = 8
 DEFAULT_IO_ADDRESS = 2048  # %MD0
 CLI_SNIPPET = "import sys; from plc.cli import main; sys.exit(main())"  # `-m plc.cli` would duplicate classes
-EXTERNAL_BENCHES = ("modbus_bridge.bench", "plc.bench_adapter", "plc.bench_heatup", "plc.tuning_study")
+EXTERNAL_BENCHES = (
+    "modbus_bridge.bench", "plc.bench_adapter", "plc.bench_heatup", "plc.bench_tunefit", "plc.tuning_study",
+)
 
 
 def conformance_dir() -> Path | None:

@@ -1,0 +1,115 @@
+"""Scan cost of the self-tuner's closing fit, FC_TuneFitNLag, in the soft-PLC (`thermost bench` calls
+`run(quick)`).
+
+The fit runs once, in the scan that ends a TUNE: least squares over the whole step record for chains of
+1 .. 6 equal lags and for two unequal lags, then the delay searched around the inflection tangent's. One
+PROGRAM builds a 64-point record of a plant's step response in its first scan and calls the function once
+per scan after that; the same program without the call is the baseline that is subtracted. Two records:
+seed 003's hot end (first order, 0.5916 degC/%, T 23.4 s, L 10.6 s) and the TCLab-like heater of two
+unequal lags (0.6 degC/%, 140 s and 16.7 s). Printed: CPU milliseconds per call and their share of the
+application's 100 ms task, with the model the fit chose. The whole fit runs in that one scan.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+from plc.bench_adapter import BENCH_CONFIGURATION, library_sources
+
+CALLS_FULL = 5
+CALLS_QUICK = 2
+TASK_BUDGET_MS = 100.0  # the application's task interval
+HIST_POINTS = 64  # T_TuneHistory
+STEP_PCT = 50.0
+
+
+@dataclass(frozen=True)
+class Record:
+    label: str
+    gain: float  # degC/%
+    lag_s: float
+    lag2_s: float  # 0: first order
+    delay_s: float
+    spacing_s: float  # between history entries
+    tangent_delay_s: float  # what the tuner's inflection tangent gives (an input of the fit)
+
+
+RECORDS = (
+    Record("seed 003 hot end (first order)", 0.5916, 23.4, 0.0, 10.6, 1.5, 10.6),
+    Record("two unequal lags (140 s, 16.7 s)", 0.6, 140.0, 16.7, 0.5, 4.0, 20.0),
+)
+
+
+def _rise(r: Record) -> str:
+    """ST expression of the rise at fT s after the delay (degC)."""
+    k = r.gain * STEP_PCT
+    if r.lag2_s <= 0.0:
+        return f"{k!r} * (1.0 - EXP(-fT / {r.lag_s!r}))"
+    t1, t2 = r.lag_s, r.lag2_s
+    return (f"{k!r} * (1.0 - ({t1!r} * EXP(-fT / {t1!r}) - {t2!r} * EXP(-fT / {t2!r})) / "
+            f"{t1 - t2!r})")
+
+
+def program(r: Record, with_fit: bool) -> str:
+    call = (f"    bOk := FC_TuneFitNLag(fTuTangent := {r.tangent_delay_s!r}, fStart := 0.0, "
+            f"fSpacing := {r.spacing_s!r}, nCount := {HIST_POINTS},\n"
+            f"                          fDeltaY := {STEP_PCT!r}, aHist := aHist,\n"
+            "                          fKs => fKs, fTu => fTu, fTg => fTg, nOrder => nOrder, fLag => fLag,\n"
+            "                          fRatio => fRatio, fDelay => fDelay, fRmsPercent => fRms);\n"
+            if with_fit else "")
+    return (
+        "PROGRAM P_Bench\n  VAR\n    aHist : T_TuneHistory;\n    bFilled : BOOL;\n    nK : INT;\n"
+        "    fT : REAL;\n    bOk : BOOL;\n    fKs : REAL;\n    fTu : REAL;\n    fTg : REAL;\n"
+        "    nOrder : INT;\n    fLag : REAL;\n"
+        "    fRatio : REAL;\n    fDelay : REAL;\n    fRms : REAL;\n  END_VAR\n"
+        "  IF NOT bFilled THEN\n"
+        f"    FOR nK := 0 TO {HIST_POINTS - 1} DO\n"
+        f"      fT := INT_TO_REAL(nK + 1) * {r.spacing_s!r} - {r.delay_s!r};\n"
+        "      aHist[nK] := 0.0;\n"
+        f"      IF fT > 0.0 THEN\n        aHist[nK] := {_rise(r)};\n      END_IF;\n"
+        "    END_FOR;\n    bFilled := TRUE;\n  ELSE\n"
+        f"{call}  END_IF;\nEND_PROGRAM\n\n" + BENCH_CONFIGURATION
+    )
+
+
+def _ms_per_scan(text: str, calls: int) -> tuple[float, object]:
+    from plc.st.compiler import load_application
+
+    app = load_application(library_sources() + [("bench_tunefit.st", text)])
+    app.scan()  # builds the record
+    start = time.process_time()
+    for _ in range(calls):
+        app.scan()
+    return (time.process_time() - start) / calls * 1e3, app
+
+
+def fit_cost(r: Record, quick: bool) -> tuple[float, str]:
+    """Milliseconds per FC_TuneFitNLag call (baseline subtracted) and the model it chose."""
+    calls = CALLS_QUICK if quick else CALLS_FULL
+    total, app = _ms_per_scan(program(r, True), calls)
+    base, _ = _ms_per_scan(program(r, False), calls)
+    if not app.get("inst0.bOk"):
+        return max(total - base, 0.0), "no model"
+    order, ratio = app.get("inst0.nOrder"), app.get("inst0.fRatio")
+    model = f"two lags, ratio {ratio:.2f}" if ratio > 0.0 else f"order {order}"
+    fitted = f"{model}, Ks {app.get('inst0.fKs'):.3f} degC/%, Tu {app.get('inst0.fTu'):.1f} s"
+    return max(total - base, 0.0), fitted
+
+
+def run(quick: bool) -> None:
+    calls = CALLS_QUICK if quick else CALLS_FULL
+    print(f"FC_TuneFitNLag, the fit in the scan that ends a TUNE, in the soft-PLC ({calls} calls per record, "
+          "baseline subtracted)")
+    for r in RECORDS:
+        try:
+            cost, model = fit_cost(r, quick)
+        except Exception as exc:  # noqa: BLE001 - a benchmark reports, it does not fail
+            print(f"  {r.label}: not measured ({type(exc).__name__}: {exc})")
+            continue
+        print(f"  {r.label:<40} {cost:8.1f} ms/call  ({cost / TASK_BUDGET_MS * 100:5.1f} % of a "
+              f"{TASK_BUDGET_MS:g} ms task); fitted {model}")
+
+
+if __name__ == "__main__":
+    run(quick=False)

@@ -57,11 +57,12 @@ def program(settings: str, with_adapter: bool) -> str:
     )
 
 
-def time_scans(text: str, scans: int) -> tuple[float, object]:
+def time_scans(text: str, scans: int, warmup: int = WARMUP_SCANS) -> tuple[float, object]:
+    """CPU microseconds per scan of the benchmark program after `warmup` scans, and the application."""
     from plc.st.compiler import load_application
 
-    app = load_application(library_sources() + [("bench_adapter.st", text)])
-    for _ in range(WARMUP_SCANS):
+    app = load_application(library_sources() + [("bench_program.st", text)])
+    for _ in range(warmup):
         app.scan()
     start = time.process_time()
     for _ in range(scans):

@@ -12,10 +12,9 @@ application's 100 ms task, with the model the fit chose. The whole fit runs in t
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 
-from plc.bench_adapter import BENCH_CONFIGURATION, library_sources
+from plc.bench_adapter import BENCH_CONFIGURATION, time_scans
 
 CALLS_FULL = 5
 CALLS_QUICK = 2
@@ -73,28 +72,19 @@ def program(r: Record, with_fit: bool) -> str:
     )
 
 
-def _ms_per_scan(text: str, calls: int) -> tuple[float, object]:
-    from plc.st.compiler import load_application
-
-    app = load_application(library_sources() + [("bench_tunefit.st", text)])
-    app.scan()  # builds the record
-    start = time.process_time()
-    for _ in range(calls):
-        app.scan()
-    return (time.process_time() - start) / calls * 1e3, app
-
-
 def fit_cost(r: Record, quick: bool) -> tuple[float, str]:
     """Milliseconds per FC_TuneFitNLag call (baseline subtracted) and the model it chose."""
     calls = CALLS_QUICK if quick else CALLS_FULL
-    total, app = _ms_per_scan(program(r, True), calls)
-    base, _ = _ms_per_scan(program(r, False), calls)
+    # one scan first: it builds the record
+    total, app = time_scans(program(r, True), calls, warmup=1)
+    base, _ = time_scans(program(r, False), calls, warmup=1)
+    cost_ms = max(total - base, 0.0) / 1e3
     if not app.get("inst0.bOk"):
-        return max(total - base, 0.0), "no model"
+        return cost_ms, "no model"
     order, ratio = app.get("inst0.nOrder"), app.get("inst0.fRatio")
     model = f"two lags, ratio {ratio:.2f}" if ratio > 0.0 else f"order {order}"
     fitted = f"{model}, Ks {app.get('inst0.fKs'):.3f} degC/%, Tu {app.get('inst0.fTu'):.1f} s"
-    return max(total - base, 0.0), fitted
+    return cost_ms, fitted
 
 
 def run(quick: bool) -> None:

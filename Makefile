@@ -17,7 +17,7 @@ run: $(STAMP)
 # the suite over every core, each file on one worker in file order (some files share a running PLC whose
 # state carries from test to test); against a real PLC (THERMOST_PLC) in one process, as every acceptance
 # test drives that one PLC. The panel's browser tests run on their own afterwards: their stack runs
-# 10 x real time and needs the CPU it asks for.
+# 20 x real time and needs the CPU it asks for.
 BROWSER_TESTS := tests/hmi/test_panel_browser.py
 TEST_WORKERS = $(if $(THERMOST_PLC),0,auto)
 test: $(STAMP) browser

@@ -36,6 +36,7 @@ RETRY_S = 0.5  # pause between reconnection attempts while the PLC does not answ
 PV_SEQ_WRAP = 2**31 - 1  # the heartbeat register is a DINT
 STARTUP_SCANS = 3  # the application takes its parameters on its first scan: write after it
 CATCH_UP_S = 1.0  # wall time the plant makes up after a stall; longer stalls are skipped
+EMBEDDED_CATCH_UP_SCANS = 2  # beside the embedded soft-PLC: what its scheduler makes up (one late scan)
 HELP = (
     "commands: fault ZONE open|short|none | load ZONE PCT | heater ZONE fail|ok | ambient DELTA_C | "
     "plc off|on (embedded soft-PLC: stop / restart serving) | status | help"
@@ -169,8 +170,9 @@ class Simulation:
     """Runs the plant against a PLC at HOST:PORT in real time / speed; survives PLC outages."""
 
     def __init__(self, sim: PlantSim, host: str, port: int, speed: float,
-                 log: Callable[[str], None] = print) -> None:
+                 log: Callable[[str], None] = print, catch_up_s: float = CATCH_UP_S) -> None:
         self.sim, self.host, self.port, self.speed, self.log = sim, host, port, speed, log
+        self.catch_up_s = catch_up_s
         self.steps = 0
         self.late_steps = 0
         self.connected = False
@@ -202,7 +204,8 @@ class Simulation:
     async def _loop(self, client: PlcClient, dt: float, stop: asyncio.Event) -> None:
         """Plant time follows the wall clock x speed: when the machine is busy and an exchange comes late,
         the plant integrates the missed steps (same inputs) instead of falling behind the PLC's clock,
-        which keeps its own deadlines. At most CATCH_UP_S of wall time is made up at once."""
+        which keeps its own deadlines. At most `catch_up_s` of wall time is made up at once; a longer
+        stall is skipped."""
         period = dt / self.speed
         t0 = time.perf_counter()
         done = 0  # plant steps since t0
@@ -213,7 +216,7 @@ class Simulation:
             outputs = await client.read_tags(self.sim.read_names)
             due = int((time.perf_counter() - t0) / period) + 1
             n = max(1, due - done)
-            if n > CATCH_UP_S / period:  # a long stall: carry on from now
+            if n > self.catch_up_s / period:  # a long stall: carry on from now
                 t0, done, n = time.perf_counter() - period, 0, 1
             for _ in range(n):
                 self.sim.apply(outputs, dt)
@@ -270,7 +273,13 @@ async def simulate(sim: PlantSim, *, host: str, port: int, speed: int, plc: tupl
     else:
         target = plc
     scenario = sim.scenario
-    runner = Simulation(sim, target[0], target[1], float(speed), log)
+    # the embedded soft-PLC skips the scans of a stall longer than its interval (an overrun), so the plant
+    # beside it in this process does the same: made-up plant steps it never scanned would show the PLC a
+    # plant moving faster than its cycle allows (the heater monitor's rate and model checks trip on that)
+    catch_up = CATCH_UP_S
+    if soft is not None:
+        catch_up = max(EMBEDDED_CATCH_UP_SCANS * soft.app.interval_ns / 1e9, scenario.dt_s / speed)
+    runner = Simulation(sim, target[0], target[1], float(speed), log, catch_up_s=catch_up)
 
     async def plc_power(on: bool) -> None:
         assert soft is not None

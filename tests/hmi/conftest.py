@@ -30,8 +30,7 @@ CHROMIUM_CANDIDATES = (
     "/usr/lib/chromium/chromium",  # Debian chromium (the real binary; /usr/bin/chromium is a wrapper)
 )
 SCREEN_DIR = ROOT / "out" / "hmi-screens"
-SPEED = 10  # plant and PLC run 10 x real time: at 20 x a busy machine starved the in-process
-# soft-PLC of scans while the plant caught up, and the heater monitor rightly saw a plant faster than physics
+SPEED = 20  # plant and PLC run 20 x real time
 ENGINEER_PASSWORD = "test-engineer-pw"
 START_TIMEOUT_S = 60.0
 

@@ -268,3 +268,39 @@ def test_simulate_plant_writes_pv_over_modbus_to_a_plc(tmp_path) -> None:
         assert v["fPvZone1"] > 162.0  # the plant (160 degC at rest) heats with the PLC's output
 
     asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("catch_up_s", [None, 0.02], ids=["wall_clock", "slips"])
+def test_a_stalled_plant_makes_up_at_most_what_it_is_allowed(catch_up_s) -> None:
+    """After a 0.4 s stall of its process the plant makes up the missed time (up to CATCH_UP_S), or, beside
+    the embedded soft-PLC (0.02 s here: two of its scans at 10 x), slips as the PLC's scheduler does."""
+    from modbus_bridge.scenario import load_scenario, resolve_scenario
+    from modbus_bridge.simulate import CATCH_UP_S, PlantSim, Simulation
+    from plc.bundle import bundle_text, with_speed
+    from plc.runtime.server import SoftPlc
+
+    speed, stall_s, step_s = 10, 0.4, 0.1  # seed 003's plant step
+
+    async def scenario() -> tuple[float, float]:
+        rm = load_register_map()
+        async with SoftPlc(with_speed(bundle_text(), speed), port=0) as plc:
+            sim = PlantSim(load_scenario(resolve_scenario("seed003_hotend_fuzzy")), rm)
+            runner = Simulation(sim, "127.0.0.1", plc.port, float(speed), log=lambda _s: None,
+                                catch_up_s=CATCH_UP_S if catch_up_s is None else catch_up_s)
+            stop = asyncio.Event()
+            task = asyncio.create_task(runner.run(stop))
+            await asyncio.sleep(0.5)
+            t0, wall0 = sim.t, time.perf_counter()
+            time.sleep(stall_s)  # the whole process stalls: plant, soft-PLC and their loop
+            await asyncio.sleep(0.3)
+            advance, wall = sim.t - t0, time.perf_counter() - wall0
+            stop.set()
+            await task
+            return advance, wall
+
+    advance, wall = asyncio.run(scenario())
+    unstalled = (wall - stall_s) * speed  # plant time of the wall time the loop ran
+    if catch_up_s is None:
+        assert advance >= unstalled + 0.5 * stall_s * speed, (advance, wall)
+    else:
+        assert advance <= unstalled + 3 * step_s, (advance, wall)

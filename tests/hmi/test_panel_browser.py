@@ -1,4 +1,4 @@
-"""The panel in a real browser against `thermost simulate` (seed 003 hot end, 10 x real time).
+"""The panel in a real browser against `thermost simulate` (seed 003 hot end, 20 x real time).
 
 The tests share one simulate + hmi pair and run in file order (the plant's state carries over): live PV,
 setpoint and mode through the faceplate, page-side refusals, levels, a full tuning with reject and
@@ -17,7 +17,7 @@ import pytest
 from .conftest import ENGINEER_PASSWORD, Stack, shot
 
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
-TUNE_TIMEOUT_S = 120.0  # 10 x real time; generous for a machine shared by many test runs
+TUNE_TIMEOUT_S = 120.0  # 20 x real time; generous for a machine shared by many test runs
 WRITE_TIMEOUT_MS = 15000  # a panel write and its read-back on that machine
 SENSOR_BITS = 1 << 0 | 1 << 6  # sensor open / sensor short (docs/library.md alarm table)
 

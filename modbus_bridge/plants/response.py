@@ -238,22 +238,20 @@ def bang_hold_bound(pm: PlantModel, y0: float, r: float, dt: float, horizon_s: f
     start = _Sim(pm, dt, start_c=y0)
     _settle(start, u0)
 
-    def held(u: float) -> np.ndarray:
-        return copy.deepcopy(start).run(lambda _t: u, u0, horizon_s)
+    def simulated(ts: float) -> np.ndarray:
+        return copy.deepcopy(start).run(lambda t: u_full if t < ts - 1e-9 else ur, u0, horizon_s)
 
-    y_full = held(u_full)
+    y_full = simulated(horizon_s)
     t_grid = dt * np.arange(1, y_full.size + 1)
+    response = simulated
     if _is_linear(plant):
-        change = held(ur) - y_full
+        change = simulated(0.0) - y_full  # the holding power from the start, less full power
 
         def response(ts: float) -> np.ndarray:
             k = min(y_full.size, max(0, math.ceil(ts / dt - 1e-9)))  # the first step run at the holding power
             y = y_full.copy()
             y[k:] += change[: y.size - k]
             return y
-    else:
-        def response(ts: float) -> np.ndarray:
-            return copy.deepcopy(start).run(lambda t: u_full if t < ts - 1e-9 else ur, u0, horizon_s)
 
     def trial(ts: float) -> float:
         return _settling(t_grid, response(ts), y0, r)

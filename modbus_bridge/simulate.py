@@ -36,7 +36,6 @@ RETRY_S = 0.5  # pause between reconnection attempts while the PLC does not answ
 PV_SEQ_WRAP = 2**31 - 1  # the heartbeat register is a DINT
 STARTUP_SCANS = 3  # the application takes its parameters on its first scan: write after it
 CATCH_UP_S = 1.0  # wall time the plant makes up after a stall; longer stalls are skipped
-EMBEDDED_CATCH_UP_SCANS = 2  # beside the embedded soft-PLC: what its scheduler makes up (one late scan)
 HELP = (
     "commands: fault ZONE open|short|none | load ZONE PCT | heater ZONE fail|ok | ambient DELTA_C | "
     "plc off|on (embedded soft-PLC: stop / restart serving) | status | help"
@@ -261,7 +260,7 @@ async def simulate(sim: PlantSim, *, host: str, port: int, speed: int, plc: tupl
     soft = None
     if plc is None:
         from plc.bundle import bundle_text, with_speed
-        from plc.runtime.server import SoftPlc
+        from plc.runtime.server import LATE_SCANS_MADE_UP, SoftPlc
 
         soft = SoftPlc(with_speed(bundle_text(), speed), host=host, port=port, stepped=False)
         await soft.start()
@@ -278,7 +277,7 @@ async def simulate(sim: PlantSim, *, host: str, port: int, speed: int, plc: tupl
     # plant moving faster than its cycle allows (the heater monitor's rate and model checks trip on that)
     catch_up = CATCH_UP_S
     if soft is not None:
-        catch_up = max(EMBEDDED_CATCH_UP_SCANS * soft.app.interval_ns / 1e9, scenario.dt_s / speed)
+        catch_up = max((LATE_SCANS_MADE_UP + 1) * soft.app.interval_ns / 1e9, scenario.dt_s / speed)
     runner = Simulation(sim, target[0], target[1], float(speed), log, catch_up_s=catch_up)
 
     async def plc_power(on: bool) -> None:

@@ -36,6 +36,7 @@ COIL_VALUES = (0x0000, 0xFF00)
 MBAP_LENGTH_SLICE = slice(4, 6)
 MBAP_LENGTH_OFFSET = 6  # the MBAP length counts the bytes after itself
 EXCEPTION_FLAG = 0x80
+LATE_SCANS_MADE_UP = 1  # real-time scheduler: a scan up to this many intervals late runs, later ones skip
 PIPELINE_BUFFER_BYTES = 1 << 20  # unprocessed request bytes kept per connection (a TCP window is 64 KiB+)
 
 
@@ -169,7 +170,7 @@ class RealTimeClock:
         interval = self.engine.interval_ns / NS_PER_S
         self._deadline += interval
         now = self.loop.time()
-        if now - self._deadline > interval:
+        if now - self._deadline > LATE_SCANS_MADE_UP * interval:
             self.engine.overruns += 1
             self._deadline = now
         self._handle = self.loop.call_at(self._deadline, self._tick)

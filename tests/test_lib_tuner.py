@@ -317,6 +317,27 @@ def test_two_unequal_lags_are_identified_from_a_record_that_ends_half_way(uut, s
     assert got["fTu"] == pytest.approx(tu, rel=0.20)
 
 
+def test_a_lag_longer_than_three_records_is_fitted_when_its_curvature_stands_out(uut) -> None:
+    """Marlin's MPC hot end: a block lagging 245.6 s behind its heater, read through a sensor 4.5 s behind the
+    block, tuned at full power to 210 degC. The record (75 s) is shorter than a third of the block's lag,
+    yet it bends away from a straight line by about five times the noise: the two lags are fitted, not left
+    to a first-order guess whose dead time stands in for the sensor's lag."""
+    k, t1, t2 = 40.0 * 0.01 / 0.068, 16.7 / 0.068, 1.0 / 0.22
+    plant = TwoLags(k=k, t1=t1, t2=t2, noise=0.05, seed=2, x0=25.0)
+    run_tune(uut, plant, w=210.0, y_tune=100.0)
+    assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
+    got = identified(uut)
+    tu, tg = plant.two_point()
+    ratio = uut.get("sPar.fTuneLagRatio")
+    print(f"Ks {got['fKs']:.3f} (true {k:.3f}) Tu {got['fTu']:.2f} (true {tu:.2f}) Tg {got['fTg']:.1f} "
+          f"(true {tg:.1f}) rho {ratio:.4f} (true {t2 / t1:.4f})")
+    assert uut.get("sPar.nTuneOrder") == 2
+    assert ratio == pytest.approx(t2 / t1, rel=0.3)
+    assert got["fKs"] == pytest.approx(k, rel=0.05)
+    assert got["fTg"] == pytest.approx(tg, rel=0.05)
+    assert got["fTu"] == pytest.approx(tu, rel=0.10)
+
+
 @pytest.mark.parametrize("rule", [RULE_CHR, RULE_COHEN_COON, RULE_SIMC, RULE_AMIGO])
 def test_selected_rule_produces_documented_values(uut, rule) -> None:
     plant = Fopdt(k=1.5, t=60.0, l=12.0)

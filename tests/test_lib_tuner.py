@@ -317,6 +317,9 @@ def test_two_unequal_lags_are_identified_from_a_record_that_ends_half_way(uut, s
     assert got["fTu"] == pytest.approx(tu, rel=0.20)
 
 
+CLOSE_FIT_RMS_PCT = 0.1  # % of the rise: the record noise averaged over its bins is far below it
+
+
 def test_a_lag_longer_than_three_records_is_fitted_when_its_curvature_stands_out(uut) -> None:
     """Marlin's MPC hot end: a block lagging 245.6 s behind its heater, read through a sensor 4.5 s behind the
     block, tuned at full power to 210 degC. The record (75 s) is shorter than a third of the block's lag,
@@ -336,6 +339,17 @@ def test_a_lag_longer_than_three_records_is_fitted_when_its_curvature_stands_out
     assert got["fKs"] == pytest.approx(k, rel=0.05)
     assert got["fTg"] == pytest.approx(tg, rel=0.05)
     assert got["fTu"] == pytest.approx(tu, rel=0.10)
+
+
+def test_the_fit_quality_of_a_close_fit_is_its_residual_not_zero(uut) -> None:
+    """fTuneFitRms (0: not fitted) of a model that fits a 150 degC rise read with 0.05 degC noise closely:
+    summed from the residuals, not from SUM r^2 - K SUM r p, which cancels to 0 in REAL on such a record."""
+    plant = TwoLags(k=40.0 * 0.01 / 0.068, t1=16.7 / 0.068, t2=1.0 / 0.22, noise=0.05, seed=2, x0=25.0)
+    run_tune(uut, plant, w=210.0, y_tune=100.0)
+    assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
+    rms = uut.get("sPar.fTuneFitRms")
+    print(f"fit rms {rms:.4f} % of the rise")
+    assert 0.0 < rms < CLOSE_FIT_RMS_PCT
 
 
 @pytest.mark.parametrize("rule", [RULE_CHR, RULE_COHEN_COON, RULE_SIMC, RULE_AMIGO])

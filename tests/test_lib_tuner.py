@@ -303,11 +303,7 @@ def test_two_unequal_lags_are_identified_from_a_record_that_ends_half_way(uut, s
     took a first-order model with the gain 60 % high or equal lags with it 30 % short (and half the lag);
     two unequal lags give the gain and the two-point FOPDT within 10 %."""
     plant = TwoLags(k=0.6, t1=140.0, t2=16.7, noise=0.2, seed=seed)
-    run_tune(uut, plant, w=plant.x0 + 0.7 * plant.k * 60.0, y_tune=60.0)
-    assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
-    got = identified(uut)
-    tu, tg = plant.two_point()
-    ratio = uut.get("sPar.fTuneLagRatio")
+    got, tu, tg, ratio = tuned_on_two_lags(uut, plant, w=plant.x0 + 0.7 * plant.k * 60.0, y_tune=60.0)
     print(f"seed {seed}: Ks {got['fKs']:.3f} Tu {got['fTu']:.1f} (true {tu:.1f}) Tg {got['fTg']:.1f} "
           f"(true {tg:.1f}) rho {ratio:.3f} (true {16.7 / 140.0:.3f})")
     assert uut.get("sPar.nTuneOrder") == 2
@@ -317,38 +313,38 @@ def test_two_unequal_lags_are_identified_from_a_record_that_ends_half_way(uut, s
     assert got["fTu"] == pytest.approx(tu, rel=0.20)
 
 
+def tuned_on_two_lags(uut, plant: TwoLags, w: float, y_tune: float) -> tuple[dict, float, float, float]:
+    """TUNE on the plant until READY: the identified values, the plant's two-point Tu and Tg, and the lag
+    ratio TUNE published."""
+    run_tune(uut, plant, w=w, y_tune=y_tune)
+    assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
+    tu, tg = plant.two_point()
+    return identified(uut), tu, tg, uut.get("sPar.fTuneLagRatio")
+
+
+# Marlin's MPC hot end: heater 40 W, block 16.7 J/K losing 0.068 W/K, sensor responding at 0.22 /s
+HOT_END_K, HOT_END_BLOCK_S, HOT_END_SENSOR_S = 40.0 * 0.01 / 0.068, 16.7 / 0.068, 1.0 / 0.22
 CLOSE_FIT_RMS_PCT = 0.1  # % of the rise: the record noise averaged over its bins is far below it
 
 
 def test_a_lag_longer_than_three_records_is_fitted_when_its_curvature_stands_out(uut) -> None:
-    """Marlin's MPC hot end: a block lagging 245.6 s behind its heater, read through a sensor 4.5 s behind the
-    block, tuned at full power to 210 degC. The record (75 s) is shorter than a third of the block's lag,
-    yet it bends away from a straight line by about five times the noise: the two lags are fitted, not left
-    to a first-order guess whose dead time stands in for the sensor's lag."""
-    k, t1, t2 = 40.0 * 0.01 / 0.068, 16.7 / 0.068, 1.0 / 0.22
+    """Marlin's MPC hot end, its block lagging 245.6 s behind the heater and read through a sensor 4.5 s
+    behind the block, tuned at full power to 210 degC. The record is shorter than a third of the block's
+    lag, yet it bends away from a straight line well above the noise: the two lags are fitted, not left to a
+    first-order guess whose dead time stands in for the sensor's lag. Their fit quality fTuneFitRms (0: not
+    fitted) is summed from the residuals, not from SUM r^2 - K SUM r p, which cancels to 0 in REAL on a
+    close fit of such a record."""
+    k, t1, t2 = HOT_END_K, HOT_END_BLOCK_S, HOT_END_SENSOR_S
     plant = TwoLags(k=k, t1=t1, t2=t2, noise=0.05, seed=2, x0=25.0)
-    run_tune(uut, plant, w=210.0, y_tune=100.0)
-    assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
-    got = identified(uut)
-    tu, tg = plant.two_point()
-    ratio = uut.get("sPar.fTuneLagRatio")
+    got, tu, tg, ratio = tuned_on_two_lags(uut, plant, w=210.0, y_tune=100.0)
+    rms = uut.get("sPar.fTuneFitRms")
     print(f"Ks {got['fKs']:.3f} (true {k:.3f}) Tu {got['fTu']:.2f} (true {tu:.2f}) Tg {got['fTg']:.1f} "
-          f"(true {tg:.1f}) rho {ratio:.4f} (true {t2 / t1:.4f})")
+          f"(true {tg:.1f}) rho {ratio:.4f} (true {t2 / t1:.4f}); fit rms {rms:.4f} % of the rise")
     assert uut.get("sPar.nTuneOrder") == 2
     assert ratio == pytest.approx(t2 / t1, rel=0.3)
     assert got["fKs"] == pytest.approx(k, rel=0.05)
     assert got["fTg"] == pytest.approx(tg, rel=0.05)
     assert got["fTu"] == pytest.approx(tu, rel=0.10)
-
-
-def test_the_fit_quality_of_a_close_fit_is_its_residual_not_zero(uut) -> None:
-    """fTuneFitRms (0: not fitted) of a model that fits a 150 degC rise read with 0.05 degC noise closely:
-    summed from the residuals, not from SUM r^2 - K SUM r p, which cancels to 0 in REAL on such a record."""
-    plant = TwoLags(k=40.0 * 0.01 / 0.068, t1=16.7 / 0.068, t2=1.0 / 0.22, noise=0.05, seed=2, x0=25.0)
-    run_tune(uut, plant, w=210.0, y_tune=100.0)
-    assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
-    rms = uut.get("sPar.fTuneFitRms")
-    print(f"fit rms {rms:.4f} % of the rise")
     assert 0.0 < rms < CLOSE_FIT_RMS_PCT
 
 

@@ -19,6 +19,8 @@ DELAY_S = 4.0
 GAIN_C = 400.0  # the step's whole rise, degC
 CURVE_NOISE_RATIO = 2.0  # FC_TuneFitNLag's fCurveNoiseRatio
 LAG_MATCH = 0.05  # a fitted lag within 5 % of the record's
+TIMES_S = SPACING_S * np.arange(1, COUNT + 1)  # when each entry was recorded, s after the step
+RECORD_S = COUNT * SPACING_S - DELAY_S  # the record after the delay
 
 DECLS = """    aHist : T_TuneHistory;
     bRun : BOOL;
@@ -49,16 +51,14 @@ def app():
 
 
 def record(lag_s: float) -> np.ndarray:
-    t = SPACING_S * np.arange(1, COUNT + 1)
-    return GAIN_C * (1.0 - np.exp(-np.clip(t - DELAY_S, 0.0, None) / lag_s))
+    return GAIN_C * (1.0 - np.exp(-np.clip(TIMES_S - DELAY_S, 0.0, None) / lag_s))
 
 
 def line_rms(r: np.ndarray) -> float:
     """rms residual of the least-squares line through the entries after the delay."""
-    t = SPACING_S * np.arange(1, COUNT + 1)
-    keep = t > DELAY_S
-    coef = np.polyfit(t[keep], r[keep], 1)
-    return float(np.sqrt(np.mean((r[keep] - np.polyval(coef, t[keep])) ** 2)))
+    keep = TIMES_S > DELAY_S
+    coef = np.polyfit(TIMES_S[keep], r[keep], 1)
+    return float(np.sqrt(np.mean((r[keep] - np.polyval(coef, TIMES_S[keep])) ** 2)))
 
 
 def fit(app, r: np.ndarray, noise_pp: float) -> ScanDriver:
@@ -72,13 +72,9 @@ def fit(app, r: np.ndarray, noise_pp: float) -> ScanDriver:
     return drv
 
 
-def record_length_s() -> float:
-    return COUNT * SPACING_S - DELAY_S
-
-
 @pytest.mark.parametrize("records", [2.0, 5.0])
 def test_a_lag_the_record_bends_for_is_fitted(app, records: float) -> None:
-    lag = records * record_length_s()
+    lag = records * RECORD_S
     r = record(lag)
     drv = fit(app, r, noise_pp=line_rms(r) / (1.5 * CURVE_NOISE_RATIO))
     assert drv.get("bOk")
@@ -87,20 +83,20 @@ def test_a_lag_the_record_bends_for_is_fitted(app, records: float) -> None:
 
 
 def test_a_lag_beyond_three_records_is_refused_when_its_bend_is_within_the_noise(app) -> None:
-    r = record(5.0 * record_length_s())
+    r = record(5.0 * RECORD_S)
     drv = fit(app, r, noise_pp=line_rms(r) / (0.5 * CURVE_NOISE_RATIO))
     assert not drv.get("bOk")
     assert drv.get("nOrder") == 0 and drv.get("fTg") == 0.0
 
 
 def test_within_three_records_the_noise_does_not_decide(app) -> None:
-    r = record(2.0 * record_length_s())
+    r = record(2.0 * RECORD_S)
     drv = fit(app, r, noise_pp=line_rms(r) / (0.5 * CURVE_NOISE_RATIO))
     assert drv.get("bOk") and drv.get("nOrder") == 1
 
 
 def test_a_lag_beyond_ten_records_is_refused_however_clear_its_bend(app) -> None:
-    r = record(12.0 * record_length_s())
+    r = record(12.0 * RECORD_S)
     assert line_rms(r) > 0.1, "the record bends"
     drv = fit(app, r, noise_pp=0.0)
     assert not drv.get("bOk") and drv.get("nOrder") == 0

@@ -322,8 +322,16 @@ def tuned_on_two_lags(uut, plant: TwoLags, w: float, y_tune: float) -> tuple[dic
     return identified(uut), tu, tg, uut.get("sPar.fTuneLagRatio")
 
 
-# Marlin's MPC hot end: heater 40 W, block 16.7 J/K losing 0.068 W/K, sensor responding at 0.22 /s
-HOT_END_K, HOT_END_BLOCK_S, HOT_END_SENSOR_S = 40.0 * 0.01 / 0.068, 16.7 / 0.068, 1.0 / 0.22
+def hot_end_two_lags() -> tuple[float, float, float]:
+    """Marlin's MPC hot end (the marlin_hotend plant's defaults) as two lags: gain (degC/%), the block's lag
+    behind its heater and the sensor's behind the block (s)."""
+    from modbus_bridge.plants.thermal import MarlinHotend
+
+    p = MarlinHotend()
+    return (p.heater_w / 100.0 / p.ambient_xfer_w_k, p.block_heat_capacity_j_k / p.ambient_xfer_w_k,
+            1.0 / p.sensor_response_per_s)
+
+
 CLOSE_FIT_RMS_PCT = 0.1  # % of the rise: the record noise averaged over its bins is far below it
 
 
@@ -334,7 +342,7 @@ def test_a_lag_longer_than_three_records_is_fitted_when_its_curvature_stands_out
     first-order guess whose dead time stands in for the sensor's lag. Their fit quality fTuneFitRms (0: not
     fitted) is summed from the residuals, not from SUM r^2 - K SUM r p, which cancels to 0 in REAL on a
     close fit of such a record."""
-    k, t1, t2 = HOT_END_K, HOT_END_BLOCK_S, HOT_END_SENSOR_S
+    k, t1, t2 = hot_end_two_lags()
     plant = TwoLags(k=k, t1=t1, t2=t2, noise=0.05, seed=2, x0=25.0)
     got, tu, tg, ratio = tuned_on_two_lags(uut, plant, w=210.0, y_tune=100.0)
     rms = uut.get("sPar.fTuneFitRms")

@@ -66,6 +66,7 @@ def _copy_array(a: list) -> list:
 
 def _namespace() -> dict:
     ns: dict = {name: getattr(rt, name) for name in RUNTIME_NAMES}
+    ns["f32"] = rt.scan_f32()
     ns.update(
         {
             "mk": _mk,

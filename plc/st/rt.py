@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import math
 import struct
+from array import array
+from collections.abc import Callable
 from fractions import Fraction
 
 from plc.st.errors import PlcRuntimeError
@@ -26,6 +28,20 @@ def f32(x: float) -> float:
         return _unpack(_pack(x))[0]
     except OverflowError:
         return INF if x > 0 else -INF
+
+
+def scan_f32() -> Callable[[float], float]:
+    """`f32` for one application's compiled code: rounds through a binary32 slot of its own (C's
+    float cast, overflow to +-inf as C gives it), about half the cost of a pack and unpack. The slot
+    is shared by every call of that application, so it must not run in two threads at once; its scans
+    never do (the engine scans under a lock), and everything else uses `f32`."""
+    slot = array("f", (0.0,))
+
+    def f32_in_scan(x: float, _slot=slot) -> float:
+        _slot[0] = x
+        return _slot[0]
+
+    return f32_in_scan
 
 
 def ws8(x: int) -> int:

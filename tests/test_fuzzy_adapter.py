@@ -223,13 +223,20 @@ def test_tuner_write_becomes_new_base(adapting: ScanDriver) -> None:
     )
 
 
+def rules_shown(drv: ScanDriver) -> list[float]:
+    return [drv.get("fbAd.fDeltaKp"), drv.get("fbAd.fDeltaKi"), drv.get("fbAd.fDeltaKd"),
+            *(drv.get(f"fbAd.aRuleStrength[{k}]") for k in range(4))]
+
+
 def test_disable_returns_smoothly_to_base(adapting: ScanDriver) -> None:
     drv = adapting
+    assert any(v != 0.0 for v in rules_shown(drv))
     drv.set("bEnable", False)
     kp = []
     for _ in range(400):
         drv.scan()
         kp.append(drv.get("sCtrl.fKp"))
+        assert rules_shown(drv) == [0.0] * 7  # off: the ratios walk back, no rule is evaluated
         if not drv.get("fbAd.bActive"):
             break
     assert not drv.get("fbAd.bActive")

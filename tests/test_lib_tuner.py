@@ -527,6 +527,23 @@ def test_settled_response_uses_t28_t63_of_seed_003(uut) -> None:
     assert got["fKs"] == pytest.approx(1.0, rel=0.05)
     assert got["fTu"] == pytest.approx(5.0, rel=0.10)
     assert got["fTg"] == pytest.approx(20.0, rel=0.10)
+    assert 0.0 < uut.get("sPar.fTuneFitRms") < CLOSE_FIT_RMS_PCT * 10.0
+
+
+def test_a_settled_response_publishes_how_well_its_two_point_model_fits() -> None:
+    """The two-point model of a response that levelled off has a fit quality too: close on a first-order
+    plant, several times worse on two lags, which no first-order model follows."""
+    rms = {}
+    for label, plant in (("FOPDT", Fopdt(k=1.0, t=20.0, l=5.0)),
+                         ("two lags", TwoLags(k=1.0, t1=20.0, t2=5.0, noise=0.0, seed=1))):
+        drv = tuner_driver()
+        run_tune(drv, plant, w=200.0, y_tune=50.0)
+        assert drv.get("nTuneState") == TUNE_READY and drv.get("fbUut.fbTuner.bSettled") is True, label
+        rms[label] = drv.get("sPar.fTuneFitRms")
+    print(f"fit rms of the settled two-point model: FOPDT {rms['FOPDT']:.3f} %, "
+          f"two lags {rms['two lags']:.3f} %")
+    assert rms["FOPDT"] > 0.0
+    assert rms["two lags"] > 2.0 * rms["FOPDT"]
 
 
 def filter_time(kp: float, noise_pp: float, goal_pp: float, cycle: float, tu: float, share: float) -> float:

@@ -51,6 +51,7 @@ TUNE_KEYS = {
     "ms": "tuned_ms",
     "noise_pp": "identified_noise_pp_c",
     "order": "identified_order",
+    "fit_rms": "identified_fit_rms_pct",
 }
 # the fuzzy adapter's Ms bound at the end of a phase it ran in (fz_ms_reachable 0: no bound in use, left out)
 ADAPTER_KEYS = {

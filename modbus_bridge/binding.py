@@ -63,6 +63,8 @@ ROLE_PATTERNS: dict[str, tuple[str, ...]] = {
     "noise_pp": (r"fTuneNoisePpZone{n}",),
     # order of the model TUNE identified: 1 FOPDT, n >= 2 n equal lags
     "order": (r"nTuneOrderZone{n}",),
+    # rms residual of that model over the step record, % of the rise (0: not fitted)
+    "fit_rms": (r"fTuneFitRmsZone{n}",),
     # the fuzzy adapter's Ms bound: the limit, the worst Ms over the gain sets it can reach, the scale of
     # the base gains and the share of the configured ratio box it kept for that
     "fz_ms_max": (r"fFuzzyMsMaxZone{n}",),

@@ -41,8 +41,8 @@ GAIN_ROLES = (
     "tg",
 )
 # read with the gains but kept only as tuning results (no trace): the filter TUNE sized, its set's Ms,
-# the sensor noise it measured at rest and the order of the model it identified
-TUNED_ONLY_ROLES = ("t_filter", "ms", "noise_pp", "order")
+# the sensor noise it measured at rest, the order of the model it identified and that model's fit quality
+TUNED_ONLY_ROLES = ("t_filter", "ms", "noise_pp", "order", "fit_rms")
 # read with the gains and kept per phase while a feature runs: group -> (the role that is non-zero while it
 # runs, the roles kept): the fuzzy adapter's Ms bound while its coil is on, the plant as the model-based
 # setpoint response measured it while a response runs

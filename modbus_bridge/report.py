@@ -35,6 +35,7 @@ SUMMARY_KEYS = (
     "tuned_tv_cool_s",
     "identified_noise_pp_c",
     "identified_order",
+    "identified_fit_rms_pct",
     "tuned_filter_s",
     "tuned_ms",
     "fuzzy_ms_reachable",

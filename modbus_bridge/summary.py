@@ -29,6 +29,7 @@ TUNED_KEYS = (  # metric key -> label with unit
     ("tuned_filter_s", "filter (s)"),
     ("tuned_ms", "Ms"),
     ("identified_order", "model order"),
+    ("identified_fit_rms_pct", "fit rms (% of rise)"),
 )
 # the fuzzy adapter's Ms bound per variant and phase (analysis.ADAPTER_KEYS) -> label
 ADAPTER_COLUMNS = (

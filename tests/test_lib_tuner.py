@@ -169,7 +169,9 @@ def identified(drv: ScanDriver) -> dict[str, float]:
     ("k", "t", "l", "w", "dy", "tau_lag", "expected_rule"),
     [
         (0.9, 100.0, 10.0, 80.0, 100.0, 0.0, RULE_AMIGO),   # lag dominated (hot end / bed like), tau = 0.09
-        (0.9, 100.0, 10.0, 80.0, 100.0, 0.1, RULE_SIMC),    # ... below a fTauLagDominated the user set
+        (0.9, 100.0, 10.0, 80.0, 100.0, 0.1, RULE_AMIGO),   # ... below a fTauLagDominated the user set, but
+                                                            # SIMC PI's Tn/Kp is 1.8 x AMIGO's (no noise)
+        (0.9, 130.0, 2.0, 80.0, 100.0, 0.1, RULE_SIMC),     # tau = 0.015: SIMC PI's Tn/Kp within 1.1 x
         (2.0, 23.4, 10.6, 100.0, 50.0, 0.1, RULE_AMIGO),    # seed 003 nozzle T and L, tau = 0.31
         (1.0, 20.0, 30.0, 70.0, 100.0, 0.0, RULE_AMIGO),    # delay dominated, tau = 0.6
     ],
@@ -655,6 +657,31 @@ def test_a_zone_still_settling_from_its_last_run_still_tunes(uut) -> None:
     rise = uut.get("fbUut.fbTuner.fRise")
     print(f"drift {drift:.3f} degC/s, record {record:.1f} s, rise {rise:.1f} degC")
     assert drift * record > 0.1 * rise, "the rest did not drift enough to tell the two readings apart"
+
+
+AMIGO_LOAD_GAIN_MIN = 1.1  # AUTO below fTauLagDominated: AMIGO when SIMC PI's Tn / Kp exceeds its by more
+
+
+@pytest.mark.parametrize(("noise", "expected_rule"),
+                         [(0.0, RULE_AMIGO), (0.02, RULE_AMIGO), (0.1, RULE_SIMC)],
+                         ids=["no-noise", "quiet", "noisy"])
+def test_below_lag_dominated_auto_takes_amigo_where_it_rejects_loads_better_and_noise_allows(
+        uut, noise, expected_rule) -> None:
+    """tau = 0.05 (a lag-dominated plant): SIMC PI integrates a load step's error to 1.37 x AMIGO's
+    (Tn / Kp); AUTO takes AMIGO unless its derivative, at the rule's own filter Td = fTuneTd Tv, would
+    move the output by more than fTuneNoiseOutput at the noise TUNE measured (Kp noise / fTuneTd)."""
+    plant = Fopdt(k=2.0, t=95.0, l=5.0, noise=noise, rng=random.Random(3))
+    run_tune(uut, plant, w=80.0, y_tune=30.0)
+    assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
+    got = identified(uut)
+    kp_a, tn_a, _, _ = rule_values(RULE_AMIGO, got["fKs"], got["fTu"], got["fTg"], got["fVmax"], 30.0)
+    kp_s, tn_s, _, _ = rule_values(RULE_SIMC, got["fKs"], got["fTu"], got["fTg"], got["fVmax"], 30.0)
+    assert (tn_s / kp_s) / (tn_a / kp_a) > AMIGO_LOAD_GAIN_MIN
+    d_noise = kp_a * uut.get("fbUut.fbTuner.fNoise") / uut.get("sPar.fTuneTd")
+    print(f"noise {noise}: AMIGO's derivative would move the output {d_noise:.2f} % p-p "
+          f"(goal {uut.get('sPar.fTuneNoiseOutput')}): rule {uut.get('nRuleUsed')}")
+    assert (d_noise <= uut.get("sPar.fTuneNoiseOutput")) == (expected_rule == RULE_AMIGO)
+    assert uut.get("nRuleUsed") == expected_rule
 
 
 @pytest.mark.parametrize("kp_limit", [2.5, 0.0], ids=["noise-limited", "limit-off"])

@@ -1,4 +1,5 @@
-"""Self-tuning study: the library's TUNE on FOPDT, double-lag and n-lag plants over tau = 0.05 ... 0.9.
+"""Self-tuning study: the library's TUNE on FOPDT, double-lag, n-lag and two-unequal-lag plants over
+tau = 0.05 ... 0.9.
 
 For each plant FB_TempController tunes itself in the soft-PLC (AUTO rule, step of `STEP_PCT` from
 ambient towards `SETPOINT_C`); the set it writes is then judged on the true plant:
@@ -36,18 +37,32 @@ RULE_NAMES = {0: "AUTO", 1: "CHR", 2: "Cohen-Coon", 3: "SIMC", 4: "AMIGO"}
 
 @dataclass(frozen=True)
 class StudyPlant:
-    """K e^(-L s) / (T s + 1)^n, K in degC per % of heater power."""
+    """K e^(-L s) / (T s + 1)^n, K in degC per % of heater power; with a second lag T2 > 0 (order 1),
+    K e^(-L s) / ((T s + 1)(T2 s + 1)): a heater block behind its heater and a sensor behind the block."""
 
     label: str
     time_constant_s: float
     order: int
     dead_time_s: float
+    second_lag_s: float = 0.0
 
     @property
     def total_time_s(self) -> float:
-        return self.time_constant_s * self.order + self.dead_time_s
+        return self.time_constant_s * self.order + self.second_lag_s + self.dead_time_s
 
-    def params(self) -> dict[str, float]:
+    @property
+    def model_name(self) -> str:
+        return "transfer_function" if self.second_lag_s > 0.0 else "nlag"
+
+    def params(self) -> dict:
+        if self.second_lag_s > 0.0:
+            t1, t2 = self.time_constant_s, self.second_lag_s
+            return {
+                "num": (GAIN_C_PER_PCT,),
+                "den": (t1 * t2, t1 + t2, 1.0),
+                "dead_time_s": self.dead_time_s,
+                "ambient_c": AMBIENT_C,
+            }
         return {
             "gain_c_per_pct": GAIN_C_PER_PCT,
             "time_constant_s": self.time_constant_s,
@@ -66,6 +81,8 @@ PLANTS: tuple[StudyPlant, ...] = (
     StudyPlant("double lag T 40 L 2", 40.0, 2, 2.0),
     StudyPlant("double lag T 40 L 20", 40.0, 2, 20.0),
     StudyPlant("double lag T 40 L 80", 40.0, 2, 80.0),
+    StudyPlant("two lags 95 + 5", 95.0, 1, 0.0, second_lag_s=5.0),
+    StudyPlant("two lags 140 + 16.7", 140.0, 1, 0.0, second_lag_s=16.7),
     StudyPlant("3-lag T 20", 20.0, 3, 0.0),
     StudyPlant("6-lag T 20", 20.0, 6, 0.0),
 )
@@ -100,9 +117,10 @@ class StudyRow:
 class _Plant:
     def __init__(self, plant: StudyPlant) -> None:
         from modbus_bridge.plants.base import PlantDisturbance
-        from modbus_bridge.plants.lti import NLag
+        from modbus_bridge.plants.lti import NLag, TransferFunctionPlant
 
-        self.model = NLag(**plant.params())  # type: ignore[arg-type]
+        kind = TransferFunctionPlant if plant.second_lag_s > 0.0 else NLag
+        self.model = kind(**plant.params())
         self.dist = PlantDisturbance.for_channels(1)
 
     def x(self) -> float:
@@ -172,7 +190,7 @@ def study(plant: StudyPlant) -> StudyRow:
     from modbus_bridge.optimise.robustness import amigo, loop_model_of, simc
     from modbus_bridge.plants.response import PlantModel
 
-    model = loop_model_of(PlantModel("nlag", plant.params(), 0), SETPOINT_C, TS)
+    model = loop_model_of(PlantModel(plant.model_name, plant.params(), 0), SETPOINT_C, TS)
     fit = model.fit
 
     drv, state = self_tune(plant)

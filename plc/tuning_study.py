@@ -18,6 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from modbus_bridge.optimise.experiment import PidGains
+from modbus_bridge.plants.response import PlantModel
 from plc.library_program import ScanDriver, controller_program, load_program
 
 TS = 0.2  # control and task cycle, s
@@ -50,9 +51,8 @@ class StudyPlant:
     def total_time_s(self) -> float:
         return self.time_constant_s * self.order + self.second_lag_s + self.dead_time_s
 
-    @property
-    def model_name(self) -> str:
-        return "transfer_function" if self.second_lag_s > 0.0 else "nlag"
+    def plant_model(self) -> PlantModel:
+        return PlantModel("transfer_function" if self.second_lag_s > 0.0 else "nlag", self.params())
 
     def params(self) -> dict:
         if self.second_lag_s > 0.0:
@@ -117,10 +117,8 @@ class StudyRow:
 class _Plant:
     def __init__(self, plant: StudyPlant) -> None:
         from modbus_bridge.plants.base import PlantDisturbance
-        from modbus_bridge.plants.lti import NLag, TransferFunctionPlant
 
-        kind = TransferFunctionPlant if plant.second_lag_s > 0.0 else NLag
-        self.model = kind(**plant.params())
+        self.model = plant.plant_model().build()
         self.dist = PlantDisturbance.for_channels(1)
 
     def x(self) -> float:
@@ -188,9 +186,8 @@ def load_iae(plant: StudyPlant, gains: PidGains) -> float:
 
 def study(plant: StudyPlant) -> StudyRow:
     from modbus_bridge.optimise.robustness import amigo, loop_model_of, simc
-    from modbus_bridge.plants.response import PlantModel
 
-    model = loop_model_of(PlantModel(plant.model_name, plant.params(), 0), SETPOINT_C, TS)
+    model = loop_model_of(plant.plant_model(), SETPOINT_C, TS)
     fit = model.fit
 
     drv, state = self_tune(plant)

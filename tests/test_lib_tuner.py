@@ -136,6 +136,16 @@ def rule_values(rule: int, ks: float, tu: float, tg: float, vmax: float, dy: flo
     return kp, simc_tn(kp, ks, tu, tg), 0.0, 0.0
 
 
+AMIGO_LOAD_GAIN_MIN = 1.1  # AUTO below fTauLagDominated: AMIGO when SIMC PI's Tn / Kp exceeds its by more
+
+
+def simc_load_ratio(ks: float, tu: float, tg: float) -> float:
+    """SIMC PI's integrated error of a load step (Tn / Kp) over AMIGO's, from the documented formulas."""
+    kp_a, tn_a, _, _ = rule_values(RULE_AMIGO, ks, tu, tg, 0.0, 1.0)
+    kp_s, tn_s, _, _ = rule_values(RULE_SIMC, ks, tu, tg, 0.0, 1.0)
+    return (tn_s / kp_s) / (tn_a / kp_a)
+
+
 SIMC_WEIGHT_0, SIMC_WEIGHT_SLOPE = 0.69, 0.27  # SIMC's b with Tn cut below Tg: 1 % overshoot on the model
 
 
@@ -659,9 +669,6 @@ def test_a_zone_still_settling_from_its_last_run_still_tunes(uut) -> None:
     assert drift * record > 0.1 * rise, "the rest did not drift enough to tell the two readings apart"
 
 
-AMIGO_LOAD_GAIN_MIN = 1.1  # AUTO below fTauLagDominated: AMIGO when SIMC PI's Tn / Kp exceeds its by more
-
-
 @pytest.mark.parametrize(("noise", "expected_rule"),
                          [(0.0, RULE_AMIGO), (0.02, RULE_AMIGO), (0.1, RULE_SIMC)],
                          ids=["no-noise", "quiet", "noisy"])
@@ -674,9 +681,8 @@ def test_below_lag_dominated_auto_takes_amigo_where_it_rejects_loads_better_and_
     run_tune(uut, plant, w=80.0, y_tune=30.0)
     assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
     got = identified(uut)
-    kp_a, tn_a, _, _ = rule_values(RULE_AMIGO, got["fKs"], got["fTu"], got["fTg"], got["fVmax"], 30.0)
-    kp_s, tn_s, _, _ = rule_values(RULE_SIMC, got["fKs"], got["fTu"], got["fTg"], got["fVmax"], 30.0)
-    assert (tn_s / kp_s) / (tn_a / kp_a) > AMIGO_LOAD_GAIN_MIN
+    assert simc_load_ratio(got["fKs"], got["fTu"], got["fTg"]) > AMIGO_LOAD_GAIN_MIN
+    kp_a = rule_values(RULE_AMIGO, got["fKs"], got["fTu"], got["fTg"], got["fVmax"], 30.0)[0]
     d_noise = kp_a * uut.get("fbUut.fbTuner.fNoise") / uut.get("sPar.fTuneTd")
     print(f"noise {noise}: AMIGO's derivative would move the output {d_noise:.2f} % p-p "
           f"(goal {uut.get('sPar.fTuneNoiseOutput')}): rule {uut.get('nRuleUsed')}")

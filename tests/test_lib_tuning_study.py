@@ -13,21 +13,18 @@ import functools
 import pytest
 
 from plc.tuning_study import IAE_RATIO_GOAL, MS_GOAL, PLANTS, StudyPlant, StudyRow, study, table
+from tests.test_lib_tuner import AMIGO_LOAD_GAIN_MIN, simc_load_ratio
 
 ROBUST_MS = 2.0
 SHORTFALLS: dict[str, str] = {}
 LAG_DOMINATED_TAU = 0.1  # the library's fTauLagDominated default
-AMIGO_LOAD_GAIN_MIN = 1.1  # below it, AMIGO when SIMC PI's Tn / Kp exceeds AMIGO's by more than this
 
 
 def auto_rule(ks: float, tu: float, tg: float) -> str:
     """docs/library.md: AUTO's rule for an identified FOPDT on a noise-free record (the study's plants)."""
-    if tu / (tu + tg) >= LAG_DOMINATED_TAU:
+    if tu / (tu + tg) >= LAG_DOMINATED_TAU or simc_load_ratio(ks, tu, tg) > AMIGO_LOAD_GAIN_MIN:
         return "AMIGO"
-    kp_amigo = (0.2 + 0.45 * tg / tu) / ks
-    tn_amigo = tu * (0.4 * tu + 0.8 * tg) / (tu + 0.1 * tg)
-    kp_simc, tn_simc = tg / (ks * 2.0 * tu), min(tg + tu / 3.0, 8.0 * tu)
-    return "AMIGO" if tn_simc / kp_simc > AMIGO_LOAD_GAIN_MIN * tn_amigo / kp_amigo else "SIMC"
+    return "SIMC"
 
 
 def _cases():

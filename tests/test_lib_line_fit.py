@@ -68,3 +68,21 @@ def test_a_reset_starts_a_new_line(drv: ScanDriver) -> None:
 def test_without_two_distinct_x_there_is_no_slope(drv: ScanDriver, xs: list[float]) -> None:
     feed(drv, xs, [1.0 + i for i in range(len(xs))])
     assert not drv.get("fbLine.bValid")
+
+
+def test_the_slope_variance_is_the_ordinary_least_squares_one(drv: ScanDriver) -> None:
+    """(residual sum of squares / (n - 2)) / Sxx: the standard error the setpoint response weighs a seen
+    lag against."""
+    rng = np.random.default_rng(11)
+    xs = np.array([f32(v) for v in 40.0 + 0.1 * np.arange(150)])
+    ys = np.array([f32(v) for v in 3.0 + 0.25 * (xs - 40.0) + rng.normal(0.0, 0.2, xs.size)])
+    feed(drv, xs, ys)
+    slope, intercept = np.polyfit(xs, ys, 1)
+    residual = ys - (slope * xs + intercept)
+    expected = float(residual @ residual) / (xs.size - 2) / float(((xs - xs.mean()) ** 2).sum())
+    assert drv.get("fbLine.fSlopeVar") == pytest.approx(expected, rel=1e-3)
+
+
+def test_points_on_a_line_leave_no_slope_variance(drv: ScanDriver) -> None:
+    feed(drv, [0.0, 1.0, 2.0, 3.0], [1.0, 3.0, 5.0, 7.0])
+    assert drv.get("fbLine.fSlopeVar") == pytest.approx(0.0, abs=1e-9)

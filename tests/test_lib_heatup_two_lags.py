@@ -81,8 +81,8 @@ def test_two_unequal_lags_land_on_their_model() -> None:
 MISMATCH_SHORTFALLS = {
     "sensor x1.3": "the slower sensor lags the path; the integral, resting until the path is in the band, "
                    "closes the rest past W: 2.75 %, 2.37 x",
-    "gain x1.2": "the rise's slope ends the pulse earlier, but the model's holding power carries the stronger "
-                 "heater past W: 3.50 %, 1.94 x",
+    "gain x1.2": "the rise's slope ends the pulse earlier, but the model's holding power carries the "
+                 "stronger heater past W: 3.50 %, 1.94 x",
 }
 
 

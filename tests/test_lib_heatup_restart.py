@@ -37,7 +37,8 @@ def second_response_holding_power() -> tuple[float, float, bool]:
         drv.set("fbUut.fX", plant.measure())
         drv.set("fbUut.nPvSequence", n + 1)
         drv.scan()
-        assert drv.get("nState") == ACTIVE, f"state {drv.get('nState')} at {n * TS:.1f} s, alarm {drv.get('fbUut.dwAlarm'):#x}"
+        assert drv.get("nState") == ACTIVE, \
+            f"state {drv.get('nState')} at {n * TS:.1f} s, alarm {drv.get('fbUut.dwAlarm'):#x}"
         limit = drv.get("fbUut.fbHeatUp.bLimitPhase")
         if was_limit and not limit and switched_at is None:
             switched_at = n * TS

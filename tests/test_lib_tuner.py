@@ -715,3 +715,32 @@ def test_a_noise_limited_set_is_simc_pi_whatever_rule_auto_picked(uut, kp_limit)
     amigo_kp = rule_values(RULE_AMIGO, got["fKs"], got["fTu"], got["fTg"], got["fVmax"], 100.0)[0]
     assert got["fKp"] < amigo_kp
     assert got["fTn"] == pytest.approx(simc_tn(got["fKp"], got["fKs"], got["fTu"], got["fTg"]), rel=1e-3)
+
+
+@dataclass
+class QuantisedTwoLags(TwoLags):
+    """Two lags read through an input card whose count is coarser than the sensor's noise (seed 000's PT100:
+    0.029 degC a count, 0.01 degC of noise)."""
+
+    count: float = 0.029
+
+    def measure(self) -> float:
+        return round(super().measure() / self.count) * self.count
+
+
+def test_a_short_lag_below_one_count_is_fitted_when_the_record_entries_resolve_it(uut) -> None:
+    """A bath of 1,800 s behind a loop of 55 s (seed 000's platform), tuned over a step of about 1,600 s: the
+    record's entries, 25.6 s apart, each average 128 samples. The first-order model leaves a residual below
+    the noise's peak-to-peak (a few counts of the input), but far above what an entry of the record carries
+    and several times the two lags' residual: the two lags are taken (against the samples' peak-to-peak, the
+    first-order model was kept)."""
+    plant = QuantisedTwoLags(k=0.44, t1=1800.0, t2=55.0, noise=0.02, seed=1)
+    got, tu, tg, ratio = tuned_on_two_lags(uut, plant, w=36.0, y_tune=50.0)
+    print(f"Ks {got['fKs']:.3f} Tu {got['fTu']:.1f} (true {tu:.1f}) Tg {got['fTg']:.0f} (true {tg:.0f}) "
+          f"rho {ratio:.4f} (true {55.0 / 1800.0:.4f}); fit rms {uut.get('sPar.fTuneFitRms'):.4f} % of the rise, "
+          f"noise pp {uut.get('sPar.fTuneNoisePp'):.3f} degC")
+    assert uut.get("sPar.nTuneOrder") == 2
+    assert ratio == pytest.approx(55.0 / 1800.0, rel=0.3)
+    assert got["fKs"] == pytest.approx(0.44, rel=0.05)
+    assert got["fTg"] == pytest.approx(tg, rel=0.05)
+    assert got["fTu"] == pytest.approx(tu, rel=0.15)

@@ -25,7 +25,7 @@ K, T_BATH, T_LOOP, DELAY = 0.44, 1800.0, 50.0, 8.0  # degC/%, s, s, s
 AMBIENT, W1, W2 = 20.0, 26.0, 30.0
 TS = 0.5  # s: the controller's cycle
 REST_S = 1000.0  # at rest at ambient, longer than the rest filter's settling (5 x T / 10)
-SECOND_STEP_AFTER_SWITCH_S = 250.0  # the first path is close to W1 and still moving: the step is not from rest
+SECOND_STEP_AFTER_SWITCH_S = 250.0  # the first path is near W1, still moving: the step is not from rest
 HORIZON_S = 1500.0  # after the second step
 NOISE = 0.01  # degC, seed 000's sensor
 MIN_STEP = 1.0  # degC: the steps are smaller than the default 5 degC (seed 000's 2 degC step sets it so too)
@@ -66,7 +66,8 @@ def second_step(order: int) -> SecondStep:
     while stepped_at is None or (n - stepped_at) * TS < HORIZON_S:
         if n == round(REST_S / TS):
             drv.set("fbUut.fW1", W1)
-        if switched_at is not None and stepped_at is None and n * TS >= switched_at + SECOND_STEP_AFTER_SWITCH_S:
+        second_due = switched_at is not None and n * TS >= switched_at + SECOND_STEP_AFTER_SWITCH_S
+        if second_due and stepped_at is None:
             drv.set("fbUut.fW1", W2)
             stepped_at = n
         x = plant.temperatures()[0]
@@ -98,9 +99,9 @@ def second_step(order: int) -> SecondStep:
 def test_a_moving_start_on_two_lags_far_apart_is_planned_on_the_lags() -> None:
     lags = second_step(order=2)
     fopdt = second_step(order=1)
-    print(f"second step 26 -> 30 degC while the first path runs: planned on the two lags {lags.overshoot_pct:.2f} % "
-          f"overshoot, 2 % settling {lags.settling_s:.1f} s; on their two-point FOPDT "
-          f"{fopdt.overshoot_pct:.2f} %, {fopdt.settling_s:.1f} s")
+    print(f"second step 26 -> 30 degC while the first path runs: planned on the two lags "
+          f"{lags.overshoot_pct:.2f} % overshoot, 2 % settling {lags.settling_s:.1f} s; "
+          f"on their two-point FOPDT {fopdt.overshoot_pct:.2f} %, {fopdt.settling_s:.1f} s")
     assert lags.moving, "the plant was at rest: this is not a moving start"
     assert lags.two_lag_plan
     assert lags.overshoot_pct <= OVERSHOOT_GOAL

@@ -315,14 +315,8 @@ def test_two_unequal_lags_are_identified_from_a_record_that_ends_half_way(uut, s
     took a first-order model with the gain 60 % high or equal lags with it 30 % short (and half the lag);
     two unequal lags give the gain and the two-point FOPDT within 10 %."""
     plant = TwoLags(k=0.6, t1=140.0, t2=16.7, noise=0.2, seed=seed)
-    got, tu, tg, ratio = tuned_on_two_lags(uut, plant, w=plant.x0 + 0.7 * plant.k * 60.0, y_tune=60.0)
-    print(f"seed {seed}: Ks {got['fKs']:.3f} Tu {got['fTu']:.1f} (true {tu:.1f}) Tg {got['fTg']:.1f} "
-          f"(true {tg:.1f}) rho {ratio:.3f} (true {16.7 / 140.0:.3f})")
-    assert uut.get("sPar.nTuneOrder") == 2
-    assert ratio == pytest.approx(16.7 / 140.0, rel=0.4)
-    assert got["fKs"] == pytest.approx(0.6, rel=0.10)
-    assert got["fTg"] == pytest.approx(tg, rel=0.10)
-    assert got["fTu"] == pytest.approx(tu, rel=0.20)
+    assert_two_lags_identified(uut, plant, w=plant.x0 + 0.7 * plant.k * 60.0, y_tune=60.0,
+                               rel=(0.4, 0.10, 0.10, 0.20), label=f"seed {seed}: ")
 
 
 def tuned_on_two_lags(uut, plant: TwoLags, w: float, y_tune: float) -> tuple[dict, float, float, float]:
@@ -332,6 +326,23 @@ def tuned_on_two_lags(uut, plant: TwoLags, w: float, y_tune: float) -> tuple[dic
     assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
     tu, tg = plant.two_point()
     return identified(uut), tu, tg, uut.get("sPar.fTuneLagRatio")
+
+
+def assert_two_lags_identified(uut, plant: TwoLags, w: float, y_tune: float,
+                               rel: tuple[float, float, float, float], label: str = "") -> None:
+    """TUNE on the plant publishes two lags, their ratio, the gain, Tg and Tu within these relative
+    tolerances (in that order) of the plant's; prints what it found."""
+    got, tu, tg, ratio = tuned_on_two_lags(uut, plant, w=w, y_tune=y_tune)
+    print(f"{label}Ks {got['fKs']:.3f} (true {plant.k:.3f}) Tu {got['fTu']:.2f} (true {tu:.2f}) "
+          f"Tg {got['fTg']:.1f} (true {tg:.1f}) rho {ratio:.4f} (true {plant.t2 / plant.t1:.4f}); "
+          f"fit rms {uut.get('sPar.fTuneFitRms'):.4f} % of the rise, "
+          f"noise pp {uut.get('sPar.fTuneNoisePp'):.3f} degC")
+    rel_ratio, rel_k, rel_tg, rel_tu = rel
+    assert uut.get("sPar.nTuneOrder") == 2
+    assert ratio == pytest.approx(plant.t2 / plant.t1, rel=rel_ratio)
+    assert got["fKs"] == pytest.approx(plant.k, rel=rel_k)
+    assert got["fTg"] == pytest.approx(tg, rel=rel_tg)
+    assert got["fTu"] == pytest.approx(tu, rel=rel_tu)
 
 
 def hot_end_two_lags() -> tuple[float, float, float]:
@@ -356,16 +367,8 @@ def test_a_lag_longer_than_three_records_is_fitted_when_its_curvature_stands_out
     close fit of such a record."""
     k, t1, t2 = hot_end_two_lags()
     plant = TwoLags(k=k, t1=t1, t2=t2, noise=0.05, seed=2, x0=25.0)
-    got, tu, tg, ratio = tuned_on_two_lags(uut, plant, w=210.0, y_tune=100.0)
-    rms = uut.get("sPar.fTuneFitRms")
-    print(f"Ks {got['fKs']:.3f} (true {k:.3f}) Tu {got['fTu']:.2f} (true {tu:.2f}) Tg {got['fTg']:.1f} "
-          f"(true {tg:.1f}) rho {ratio:.4f} (true {t2 / t1:.4f}); fit rms {rms:.4f} % of the rise")
-    assert uut.get("sPar.nTuneOrder") == 2
-    assert ratio == pytest.approx(t2 / t1, rel=0.3)
-    assert got["fKs"] == pytest.approx(k, rel=0.05)
-    assert got["fTg"] == pytest.approx(tg, rel=0.05)
-    assert got["fTu"] == pytest.approx(tu, rel=0.10)
-    assert 0.0 < rms < CLOSE_FIT_RMS_PCT
+    assert_two_lags_identified(uut, plant, w=210.0, y_tune=100.0, rel=(0.3, 0.05, 0.05, 0.10))
+    assert 0.0 < uut.get("sPar.fTuneFitRms") < CLOSE_FIT_RMS_PCT
 
 
 @pytest.mark.parametrize("rule", [RULE_CHR, RULE_COHEN_COON, RULE_SIMC, RULE_AMIGO])
@@ -735,12 +738,4 @@ def test_a_short_lag_below_one_count_is_fitted_when_the_record_entries_resolve_i
     and several times the two lags' residual: the two lags are taken (against the samples' peak-to-peak, the
     first-order model was kept)."""
     plant = QuantisedTwoLags(k=0.44, t1=1800.0, t2=55.0, noise=0.02, seed=1)
-    got, tu, tg, ratio = tuned_on_two_lags(uut, plant, w=36.0, y_tune=50.0)
-    print(f"Ks {got['fKs']:.3f} Tu {got['fTu']:.1f} (true {tu:.1f}) Tg {got['fTg']:.0f} (true {tg:.0f}) "
-          f"rho {ratio:.4f} (true {55.0 / 1800.0:.4f}); fit rms {uut.get('sPar.fTuneFitRms'):.4f} % of the rise, "
-          f"noise pp {uut.get('sPar.fTuneNoisePp'):.3f} degC")
-    assert uut.get("sPar.nTuneOrder") == 2
-    assert ratio == pytest.approx(55.0 / 1800.0, rel=0.3)
-    assert got["fKs"] == pytest.approx(0.44, rel=0.05)
-    assert got["fTg"] == pytest.approx(tg, rel=0.05)
-    assert got["fTu"] == pytest.approx(tu, rel=0.15)
+    assert_two_lags_identified(uut, plant, w=36.0, y_tune=50.0, rel=(0.3, 0.05, 0.05, 0.15))

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import kept_values
 from .loop import PhaseRecord, RunResult, ZoneTrace
 from .metrics import (
     BAND_2PCT,
@@ -37,31 +38,11 @@ from .metrics import (
 )
 
 LOAD_KINDS = ("load_step", "ambient_step", "fan", "filament")
-TUNE_KEYS = {
-    "ks": "identified_ks_c_per_pct",
-    "tu": "identified_tu_s",
-    "tg": "identified_tg_s",
-    "kp": "tuned_kp_pct_per_c",
-    "tn": "tuned_tn_s",
-    "tv": "tuned_tv_s",
-    "kp_cool": "tuned_kp_cool_pct_per_c",
-    "tn_cool": "tuned_tn_cool_s",
-    "tv_cool": "tuned_tv_cool_s",
-    "t_filter": "tuned_filter_s",
-    "ms": "tuned_ms",
-    "noise_pp": "identified_noise_pp_c",
-    "order": "identified_order",
-    "fit_rms": "identified_fit_rms_pct",
-}
+TUNE_KEYS = kept_values.metric_of(kept_values.TUNED)
 # the fuzzy adapter's Ms bound at the end of a phase it ran in (fz_ms_reachable 0: no bound in use, left out)
-ADAPTER_KEYS = {
-    "fz_ms_reachable": "fuzzy_ms_reachable",
-    "fz_ms_max": "fuzzy_ms_max",
-    "fz_gain_scale": "fuzzy_gain_scale",
-    "fz_box_share": "fuzzy_box_share",
-}
+ADAPTER_KEYS = kept_values.metric_of(kept_values.ADAPTER)
 # the plant as a model-based setpoint response that ran in the phase measured it (its limit phase)
-HEATUP_KEYS = {"heatup_tu": "heatup_tu_seen_s", "heatup_tg": "heatup_tg_seen_s"}
+HEATUP_KEYS = kept_values.metric_of(kept_values.HEATUP)
 
 
 @dataclass

@@ -17,6 +17,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+from . import kept_values
 from .binding import RAW_FULL_SCALE, RAW_SENSOR_ROLES, UNLOCK_KEY, ControllerCodes, ZoneBinding
 from .client import PlcClient, PlcError
 from .plants import Plant, PlantDisturbance, ZoneDisturbance
@@ -26,31 +27,20 @@ from .scenario import Phase, Scenario, Variant, Zone
 from .sensors import Sensor
 
 PERCENT = 100.0
-GAIN_ROLES = (
-    "kp_eff",
-    "tn_eff",
-    "tv_eff",
-    "kp",
-    "tn",
-    "tv",
-    "kp_cool",
-    "tn_cool",
-    "tv_cool",
-    "ks",
-    "tu",
-    "tg",
-)
-# read with the gains but kept only as tuning results (no trace): the filter TUNE sized, its set's Ms,
-# the sensor noise it measured at rest, the order of the model it identified and that model's fit quality
-TUNED_ONLY_ROLES = ("t_filter", "ms", "noise_pp", "order", "fit_rms")
+# the effective gains the controller runs with (the fuzzy adapter's), traced through the run
+EFFECTIVE_GAIN_ROLES = ("kp_eff", "tn_eff", "tv_eff")
+# traced through the run: the effective gains and the tuned set and identified plant (kept_values.TUNED)
+GAIN_ROLES = (*EFFECTIVE_GAIN_ROLES, *(v.role for v in kept_values.TUNED if v.traced))
+# read with the gains but kept only as tuning results (no trace)
+TUNED_ONLY_ROLES = tuple(v.role for v in kept_values.TUNED if not v.traced)
 # read with the gains and kept per phase while a feature runs: group -> (the role that is non-zero while it
 # runs, the roles kept): the fuzzy adapter's Ms bound while its coil is on, the plant as the model-based
 # setpoint response measured it while a response runs
 RUNNING_GROUPS: dict[str, tuple[str, tuple[str, ...]]] = {
-    "adapter": ("fuzzy", ("fz_ms_reachable", "fz_ms_max", "fz_gain_scale", "fz_box_share")),
-    "heatup": ("heatup_state", ("heatup_tu", "heatup_tg")),
+    "adapter": (kept_values.ADAPTER_GATE, kept_values.roles(kept_values.ADAPTER)),
+    "heatup": (kept_values.HEATUP_GATE, kept_values.roles(kept_values.HEATUP)),
 }
-TUNED_ROLES = ("kp", "tn", "tv", "kp_cool", "tn_cool", "tv_cool", "ks", "tu", "tg", *TUNED_ONLY_ROLES)
+TUNED_ROLES = kept_values.roles(kept_values.TUNED)
 PROGRESS_EVERY = 50  # plant steps between progress reports
 # plant steps between reads of gains, identified plant, state and error id (1 s at dt = 0.1 s); the state
 # is read every step while a zone waits for an event (until = "tuned")

@@ -16,6 +16,7 @@ import math
 import re
 from pathlib import Path
 
+from . import kept_values
 from .analysis import PhaseMetrics
 from .loop import RunResult
 from .metrics import json_safe
@@ -24,24 +25,8 @@ from .summary import render_html, render_markdown, summary_blocks
 
 SUMMARY_KEYS = (
     "tuning_duration_s",
-    "identified_ks_c_per_pct",
-    "identified_tu_s",
-    "identified_tg_s",
-    "tuned_kp_pct_per_c",
-    "tuned_tn_s",
-    "tuned_tv_s",
-    "tuned_kp_cool_pct_per_c",
-    "tuned_tn_cool_s",
-    "tuned_tv_cool_s",
-    "identified_noise_pp_c",
-    "identified_order",
-    "identified_fit_rms_pct",
-    "tuned_filter_s",
-    "tuned_ms",
-    "fuzzy_ms_reachable",
-    "fuzzy_ms_max",
-    "fuzzy_gain_scale",
-    "fuzzy_box_share",
+    *(v.metric for v in kept_values.TUNED),
+    *(v.metric for v in kept_values.ADAPTER),
     "dead_time_s",
     "rise_time_s",
     "settling_time_2pct_s",

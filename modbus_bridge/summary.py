@@ -14,30 +14,14 @@ import html
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from . import kept_values
 from .analysis import PhaseMetrics
 from .loop import RunResult
 from .verdict import verdict_rows, verdict_table
 
-TUNED_KEYS = (  # metric key -> label with unit
-    ("identified_ks_c_per_pct", "Ks (°C/%)"),
-    ("identified_tu_s", "Tu (s)"),
-    ("identified_tg_s", "Tg (s)"),
-    ("tuned_kp_pct_per_c", "Kp (%/°C)"),
-    ("tuned_tn_s", "Tn (s)"),
-    ("tuned_tv_s", "Tv (s)"),
-    ("identified_noise_pp_c", "noise p-p (°C)"),
-    ("tuned_filter_s", "filter (s)"),
-    ("tuned_ms", "Ms"),
-    ("identified_order", "model order"),
-    ("identified_fit_rms_pct", "fit rms (% of rise)"),
-)
-# the fuzzy adapter's Ms bound per variant and phase (analysis.ADAPTER_KEYS) -> label
-ADAPTER_COLUMNS = (
-    ("fuzzy_ms_reachable", "Ms worst reachable"),
-    ("fuzzy_ms_max", "Ms bound"),
-    ("fuzzy_gain_scale", "base gains ×"),
-    ("fuzzy_box_share", "ratio box kept"),
-)
+TUNED_KEYS = kept_values.columns(kept_values.TUNED)  # metric key -> label with unit
+# the fuzzy adapter's Ms bound per variant and phase -> label
+ADAPTER_COLUMNS = kept_values.columns(kept_values.ADAPTER)
 
 
 @dataclass

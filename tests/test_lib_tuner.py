@@ -720,6 +720,37 @@ def test_a_noise_limited_set_is_simc_pi_whatever_rule_auto_picked(uut, kp_limit)
     assert got["fTn"] == pytest.approx(simc_tn(got["fKp"], got["fKs"], got["fTu"], got["fTg"]), rel=1e-3)
 
 
+SIMC_INTEGRATING_TN_FACTOR = 4.0  # Tn = 4 (tau_c + Tu) (Skogestad 2003)
+SIMC_INTEGRATING_WEIGHT = 0.69  # the SIMC weight's limit for Tn far below Tg
+
+
+def test_a_noise_limited_set_without_a_model_is_simc_pi_on_the_tangent(uut) -> None:
+    """A record still straight when the step ends (Ks and Tg not identifiable: CHR on the tangent) from a
+    noisy sensor: the noise limits Kp, and the set is SIMC PI for the integrating process the tangent is,
+    k' e^(-Tu s) / s with k' = Vmax / dY: tau_c + Tu = 1 / (k' Kp), Tn = 4 (tau_c + Tu), b = 0.69, no
+    derivative. Without a model to divide by, Tn is not cut to a share of the delay."""
+    plant = Fopdt(k=5.0, t=2000.0, l=8.0, noise=0.1, rng=random.Random(5))
+    kp_limit, dy = 2.5, 100.0
+    run_tune(uut, plant, w=45.0, y_tune=dy, extra={"fTuneNoiseKpOutput": kp_limit})
+    assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
+    got = identified(uut)
+    assert got["fTg"] == 0.0 and got["fKs"] == 0.0
+    assert uut.get("nRuleUsed") == RULE_SIMC
+    assert (got["fTv"], got["fTd"]) == (0.0, 0.0)
+    tf = uut.get("sPar.fTFilterTuned")
+    a = TS / (tf + TS)
+    noise_filtered = uut.get("fbUut.fbTuner.fNoise") * math.sqrt(a / (2.0 - a))
+    assert got["fKp"] == pytest.approx(kp_limit / noise_filtered, rel=1e-3)
+    k_prime = got["fVmax"] / dy
+    want_tn = SIMC_INTEGRATING_TN_FACTOR / (k_prime * got["fKp"])
+    kp_chr = rule_values(RULE_CHR, 0.0, got["fTu"], 0.0, got["fVmax"], dy)[0]
+    print(f"Kp {got['fKp']:.3f} %/degC (CHR's {kp_chr:.1f}), Tn {got['fTn']:.1f} s "
+          f"(4 / (k' Kp) = {want_tn:.1f} s, Tu {got['fTu']:.2f} s), b {got['fSetpointWeight']:.2f}")
+    assert got["fTn"] == pytest.approx(want_tn, rel=1e-3)
+    assert got["fTn"] > got["fTu"]
+    assert got["fSetpointWeight"] == pytest.approx(SIMC_INTEGRATING_WEIGHT, rel=1e-6)
+
+
 @dataclass
 class QuantisedTwoLags(TwoLags):
     """Two lags read through an input card whose count is coarser than the sensor's noise (seed 000's PT100:

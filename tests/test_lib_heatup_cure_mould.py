@@ -23,7 +23,7 @@ from tests.test_lib_heatup_printer_plants import NOISE_C, NOMINAL_BOUND_RATIO, N
 MOULD = PlantModel("cure_mould", dict(ambient_c=80.0, heater_w=80.0, neighbour_xfer_w_k=0.1))
 OTHER_PADS_PCT = 0.0
 TUNE_W, STEP_W = 100.0, 115.0  # degC: below the resin's activation, so the plant stays linear
-TUNE_TIMEOUT_S, REST_S, STEP_S = 3000.0, 2500.0, 1500.0
+TUNE_TIMEOUT_S, REST_S, STEP_S = 3000.0, 1500.0, 600.0
 REACH_DT = 1.0  # s: the scenario's plant step
 SETTLE_S = 20_000.0  # s: the mesh's slowest mode many times over
 BAND = 0.02

@@ -372,6 +372,11 @@ def step_from_rest(drv: ScanDriver, plant, dist: PlantDisturbance, ts: float, re
             t_s.append((n - start) * ts)
             xs.append(x)
         plant.step([drv.get("fbUut.fY")], ts, dist)
+    return step_figures(t_s, xs, w0, w1, ts)
+
+
+def step_figures(t_s: list[float], xs: list[float], w0: float, w1: float, ts: float) -> StepResult:
+    """2 % settling (from the first sample, s) and overshoot (% of the step) of a heating step w0 -> w1."""
     step = w1 - w0
     outside = [t for t, x in zip(t_s, xs, strict=True) if abs(x - w1) > BAND * step]
     settling = outside[-1] + ts if outside else 0.0

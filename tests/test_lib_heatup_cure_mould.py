@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from modbus_bridge.plants.base import PlantDisturbance
-from modbus_bridge.plants.response import PlantModel, rest_input
+from modbus_bridge.plants.response import PlantModel, full_power_reach
 from tests.test_lib_heatup import TS, StepResult, controller, step_from_rest, tune_from
 from tests.test_lib_heatup_printer_plants import NOISE_C, NOMINAL_BOUND_RATIO, NOMINAL_OVERSHOOT_PCT
 
@@ -25,8 +25,6 @@ OTHER_PADS_PCT = 0.0
 TUNE_W, STEP_W = 100.0, 115.0  # degC: below the resin's activation, so the plant stays linear
 TUNE_TIMEOUT_S, REST_S, STEP_S = 3000.0, 1500.0, 600.0
 REACH_DT = 1.0  # s: the scenario's plant step
-SETTLE_S = 20_000.0  # s: the mesh's slowest mode many times over
-BAND = 0.02
 Y_TUNE_PCT = 60.0  # the application's TUNE step (at full power the record stays straight: no Ks, Tg)
 SUPERVISION = (("fWatchPeriod", 240.0), ("fRunawayPeriod", 300.0))  # a slow mould is watched over minutes
 
@@ -54,27 +52,13 @@ def tuned_step(heat_up: bool, seed: int = 4) -> StepResult:
     return step_from_rest(drv, plant, dist, TS, REST_S, STEP_S, TUNE_W, STEP_W, noise=NOISE_C, seed=seed)
 
 
-def full_power_reach_s() -> float:
-    """From rest at TUNE_W (the other pads unpowered), the time full power takes to bring pad 1 into the 2 %
-    band of STEP_W: no controller limited to 100 % settles sooner."""
-    plant, dist = PadOne(MOULD.build()), PlantDisturbance.for_channels(1)
-    u_rest = rest_input(MOULD, TUNE_W, u_others=OTHER_PADS_PCT)
-    for _ in range(round(SETTLE_S / REACH_DT)):
-        plant.step([u_rest], REACH_DT, dist)
-    t = 0.0
-    while plant.temperatures()[0] < STEP_W - BAND * (STEP_W - TUNE_W):
-        plant.step([100.0], REACH_DT, dist)
-        t += REACH_DT
-    return t
-
-
 def test_the_cure_mould_steps_within_the_nominal_goals_of_the_time_full_power_takes() -> None:
     """A single switch to the holding power cannot settle on this plant (after the pulse, pad 1 loses heat to
     its unpowered neighbours for the mesh's slow time constants, about 1,000 s), so the bang-hold bound of
     the other plants is none here; the time full power takes to reach the band is, and the step is held to
     the nominal goals against it: 0.5 % overshoot, 1.05 times that time."""
     got, plain = tuned_step(heat_up=True), tuned_step(heat_up=False)
-    reach = full_power_reach_s()
+    reach = full_power_reach(MOULD, TUNE_W, STEP_W, REACH_DT, STEP_S, u_others=OTHER_PADS_PCT)
     print(f"cure mould pad 1 {TUNE_W:.0f} -> {STEP_W:.0f} degC: {got.overshoot_pct:.2f} %, "
           f"{got.settling_s:.1f} s = {got.settling_s / reach:.2f} x the time full power takes to the band "
           f"({reach:.0f} s); PID alone {plain.overshoot_pct:.2f} %, {plain.settling_s:.1f} s = "

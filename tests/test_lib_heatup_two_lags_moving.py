@@ -18,7 +18,7 @@ import pytest
 
 from modbus_bridge.plants.base import PlantDisturbance
 from modbus_bridge.plants.lti import TransferFunctionPlant
-from tests.test_lib_heatup import ACTIVE, OVEN_SUPERVISION, controller
+from tests.test_lib_heatup import ACTIVE, OVEN_SUPERVISION, controller, step_figures
 from tests.test_lib_tuner import RULE_AMIGO, rule_values, two_lags_two_point
 
 K, T_BATH, T_LOOP, DELAY = 0.44, 1800.0, 50.0, 8.0  # degC/%, s, s, s
@@ -31,7 +31,6 @@ NOISE = 0.01  # degC, seed 000's sensor
 MIN_STEP = 1.0  # degC: the steps are smaller than the default 5 degC (seed 000's 2 degC step sets it so too)
 SEED = 3
 OVERSHOOT_GOAL = 0.5  # % of the step, true temperature
-BAND = 0.02
 
 
 @dataclass
@@ -90,10 +89,8 @@ def second_step(order: int) -> SecondStep:
         n += 1
         if switched_at is None and n * TS > REST_S + 2000.0:
             pytest.fail("the first response never switched")
-    step = W2 - W1
-    outside = [t for t, x in zip(t_s, xs, strict=True) if abs(x - W2) > BAND * step]
-    settling = outside[-1] + TS if outside else 0.0
-    return SecondStep(planned, moving, max(0.0, max(xs) - W2) / step * 100.0, settling)
+    figures = step_figures(t_s, xs, W1, W2, TS)
+    return SecondStep(planned, moving, figures.overshoot_pct, figures.settling_s)
 
 
 def test_a_moving_start_on_two_lags_far_apart_is_planned_on_the_lags() -> None:

@@ -271,6 +271,22 @@ def bang_hold_bound(pm: PlantModel, y0: float, r: float, dt: float, horizon_s: f
     return BangHold(ts, settle, over, u_full, ur, t_grid, y)
 
 
+def full_power_reach(pm: PlantModel, y0: float, r: float, dt: float, horizon_s: float,
+                     u_others: float | None = None) -> float:
+    """From rest at y0, the time the actuator's limit towards r takes to bring the channel into the 2 % band
+    of r (inf when not within horizon_s): no controller limited to that range settles sooner. The other
+    channels keep the input that held the start (all channels alike), or u_others when given."""
+    u0 = rest_input(pm, y0, u_others=u_others)
+    others = u0 if u_others is None else u_others
+    plant = pm.build()
+    u_full = plant.u_max_pct if r > y0 else plant.u_min_pct
+    sim = _Sim(pm, dt, start_c=y0)
+    _settle(sim, u0, others)
+    y = sim.run(lambda _t: u_full, others, horizon_s)
+    inside = np.flatnonzero(np.abs(y - r) <= BAND_2PCT * abs(r - y0))
+    return float(dt * (inside[0] + 1)) if inside.size else math.inf
+
+
 def pid_frequency_response(kp: float, tn: float, tv: float, td: float, omegas: np.ndarray) -> np.ndarray:
     """FB_CtrlPid's form: Kp (1 + 1/(Tn s) + Tv s/(Td s + 1)) (Tn <= 0: no I part)."""
     s = 1j * omegas

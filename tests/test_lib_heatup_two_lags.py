@@ -7,7 +7,8 @@ whose rise is clearly faster than the model's (a faster sensor, a stronger heate
 cannot tell them apart) gets its pulse planned again on the slow lag that slope shows (without it, a
 sensor 30 % faster overshot 16.5 %); otherwise the PID alone follows the model's plan, its integrator
 resting while the path is farther from W than the settling band (a plant that lags the path would
-otherwise wind it up: sensor x1.3 overshot 5.4 %, a weaker one 3.2 %). The figures of the cases that miss
+otherwise wind it up: sensor x1.3 overshot 5.4 %, a weaker one 3.2 %), unless X runs ahead of the path
+(a stronger heater: its integral takes off the power it does not need). The figures of the cases that miss
 the goals are expected failures that state them.
 At the TCLab's 0.2 degC noise one run's overshoot moves by a few tenths of a percent with the noise draw
 (0.075 degC is 0.5 % of the step), so the nominal step is held to the goals on the mean of NOMINAL_SEEDS
@@ -16,6 +17,7 @@ noise draws, and the worst of them is printed.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -36,6 +38,8 @@ OVERSHOOT_GOAL = 0.5
 BOUND_RATIO_GOAL = 1.2  # the bang-hold bound overshoots (2.0 % here) to enter the band; the plan keeps 0.25 %
 MISMATCH_OVERSHOOT_GOAL, MISMATCH_BOUND_RATIO_GOAL = 2.0, 1.5
 MISMATCH_SEED = 7
+# a 20 % stronger heater with the integrator resting until the path is in the band (not ahead of it): 3.50 %
+STRONGER_HEATER_OVERSHOOT_MAX = 3.0
 NOMINAL_SEEDS = range(1, 8)
 
 
@@ -51,6 +55,7 @@ class Step:
     bound_s: float
 
 
+@functools.cache
 def step(sensor: float = 1.0, block: float = 1.0, gain: float = 1.0, seed: int = MISMATCH_SEED) -> Step:
     """45 -> 60 degC from rest on the plant (lags and gain times these), the model being the nominal one."""
     tu, tg = two_lags_two_point(T_SENSOR, T_BLOCK)
@@ -82,7 +87,8 @@ MISMATCH_SHORTFALLS = {
     "sensor x1.3": "the slower sensor lags the path; the integral, resting until the path is in the band, "
                    "closes the rest past W: 2.75 %, 2.37 x",
     "gain x1.2": "the rise's slope ends the pulse earlier, but the model's holding power carries the "
-                 "stronger heater past W: 3.50 %, 1.94 x",
+                 "stronger heater past W before its integral, acting once X runs ahead of the path, has "
+                 "taken that power off: 2.84 %, 1.68 x",
 }
 
 
@@ -102,3 +108,13 @@ def test_two_lags_unlike_their_model_stay_within_the_mismatch_goals(mismatch: di
           f"{got.bound_s:.1f} s, overshoot {got.overshoot_pct:.2f} %")
     assert got.overshoot_pct <= MISMATCH_OVERSHOOT_GOAL
     assert got.settling_s <= MISMATCH_BOUND_RATIO_GOAL * got.bound_s
+
+
+def test_a_plant_ahead_of_the_path_gets_its_integral_before_it_passes_w() -> None:
+    """A stronger heater than the model's runs ahead of the path at the model's holding power; waiting for
+    the path to reach the band before integrating let it overshoot 3.50 %. It still misses the mismatch goal
+    (the expected failure above), by less."""
+    got = step(gain=1.2)
+    print(f"gain x1.2: overshoot {got.overshoot_pct:.2f} %, "
+          f"settling {got.settling_s / got.bound_s:.2f} x the bound")
+    assert got.overshoot_pct <= STRONGER_HEATER_OVERSHOOT_MAX

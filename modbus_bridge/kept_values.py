@@ -57,8 +57,9 @@ HEATUP: tuple[KeptValue, ...] = (
 )
 
 
-def roles(values: tuple[KeptValue, ...]) -> tuple[str, ...]:
-    return tuple(v.role for v in values)
+def roles(values: tuple[KeptValue, ...], traced: bool | None = None) -> tuple[str, ...]:
+    """binding roles of the values (traced True/False: only those that are / are not traced)"""
+    return tuple(v.role for v in values if traced is None or v.traced == traced)
 
 
 def metric_of(values: tuple[KeptValue, ...]) -> dict[str, str]:

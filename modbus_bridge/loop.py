@@ -30,9 +30,9 @@ PERCENT = 100.0
 # the effective gains the controller runs with (the fuzzy adapter's), traced through the run
 EFFECTIVE_GAIN_ROLES = ("kp_eff", "tn_eff", "tv_eff")
 # traced through the run: the effective gains and the tuned set and identified plant (kept_values.TUNED)
-GAIN_ROLES = (*EFFECTIVE_GAIN_ROLES, *(v.role for v in kept_values.TUNED if v.traced))
+GAIN_ROLES = (*EFFECTIVE_GAIN_ROLES, *kept_values.roles(kept_values.TUNED, traced=True))
 # read with the gains but kept only as tuning results (no trace)
-TUNED_ONLY_ROLES = tuple(v.role for v in kept_values.TUNED if not v.traced)
+TUNED_ONLY_ROLES = kept_values.roles(kept_values.TUNED, traced=False)
 # read with the gains and kept per phase while a feature runs: group -> (the role that is non-zero while it
 # runs, the roles kept): the fuzzy adapter's Ms bound while its coil is on, the plant as the model-based
 # setpoint response measured it while a response runs

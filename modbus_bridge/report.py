@@ -25,8 +25,8 @@ from .summary import render_html, render_markdown, summary_blocks
 
 SUMMARY_KEYS = (
     "tuning_duration_s",
-    *(v.metric for v in kept_values.TUNED),
-    *(v.metric for v in kept_values.ADAPTER),
+    *kept_values.metric_of(kept_values.TUNED).values(),
+    *kept_values.metric_of(kept_values.ADAPTER).values(),
     "dead_time_s",
     "rise_time_s",
     "settling_time_2pct_s",

@@ -1,6 +1,6 @@
 """FB_LineFit, the running least-squares line the tuner (the rest's drift) and the setpoint response (the
-dead time from the early rise) read: against numpy's polyfit on the same points, after a reset, and with
-too few distinct x for a slope."""
+dead time from the early rise, the lags from the rise's window) read: against numpy's polyfit and variance
+on the same points, after a reset, and with too few distinct x for a slope."""
 
 from __future__ import annotations
 
@@ -53,6 +53,7 @@ def test_the_line_is_numpy_s_least_squares_line(drv: ScanDriver) -> None:
     assert drv.get("fbLine.fSlope") == pytest.approx(slope, rel=TOLERANCE)
     assert drv.get("fbLine.fMeanX") == pytest.approx(xs32.mean(), rel=TOLERANCE)
     assert drv.get("fbLine.fMeanY") == pytest.approx(ys32.mean(), rel=TOLERANCE)
+    assert drv.get("fbLine.fVarX") == pytest.approx(xs32.var(), rel=1e-3)
     assert drv.get("fbLine.fMeanY") - drv.get("fbLine.fSlope") * drv.get("fbLine.fMeanX") == pytest.approx(
         intercept, rel=TOLERANCE)
 

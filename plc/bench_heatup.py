@@ -13,9 +13,7 @@ scan on a real OpenPLC runtime is in docs/openplc.md).
 
 from __future__ import annotations
 
-import time
-
-from plc.bench_adapter import BENCH_CONFIGURATION, WARMUP_SCANS, cost_line, library_sources
+from plc.bench_adapter import BENCH_CONFIGURATION, cost_line, scan_times
 
 SCANS_FULL = 2400
 SCANS_QUICK = 1200  # two responses each way, so each kind of plan and fit is in the longest scan
@@ -38,17 +36,20 @@ def program(with_block: bool, order: int = 1, ratio: float = 0.0) -> str:
             "       fCycleTime := 0.1);\n"
             "  IF fbHu.bActive THEN\n    nActive := nActive + 1;\n  END_IF;\n"
             if with_block else "")
-    rise = ("  IF fT > 10.6 THEN\n    fX := 160.0 + 59.16 * (1.0 - EXP(-(fT - 10.6) / 23.4));\n  END_IF;\n"
-            if order <= 1 else
-            f"  fX := 160.0 + 59.16 * FC_LagModelStep(fX := (fT - fDelay) / fLag, nOrder := {order},"
-            f" fRatio := {ratio!r});\n")
+    if order <= 1:
+        chain = ""
+        rise = "  IF fT > 10.6 THEN\n    fX := 160.0 + 59.16 * (1.0 - EXP(-(fT - 10.6) / 23.4));\n  END_IF;\n"
+    else:  # the chain's lags from the FOPDT once; its response each scan
+        chain = ("  IF NOT bChain THEN\n"
+                 f"    bChain := FC_NLagFromFopdt(nOrder := {order}, fRatio := {ratio!r}, fTu := 10.6,"
+                 " fTg := 23.4, fLag => fLag, fDelay => fDelay);\n  END_IF;\n")
+        rise = (f"  fX := 160.0 + 59.16 * FC_LagModelStep(fX := (fT - fDelay) / fLag, nOrder := {order},"
+                f" fRatio := {ratio!r});\n")
     return (
         "PROGRAM P_Bench\n  VAR\n    fbHu : FB_CtrlHeatUp;\n    nScan : INT;\n    fT : REAL;\n"
         "    fX : REAL := 160.0;\n    fW : REAL := 160.0;\n    fY0 : REAL;\n    nActive : DINT;\n"
         "    fLag : REAL;\n    fDelay : REAL;\n    bChain : BOOL;\n  END_VAR\n"
-        "  IF NOT bChain THEN\n"
-        f"    bChain := FC_NLagFromFopdt(nOrder := {max(order, 1)}, fRatio := {ratio!r}, fTu := 10.6,"
-        " fTg := 23.4, fLag => fLag, fDelay => fDelay);\n  END_IF;\n"
+        f"{chain}"
         "  nScan := nScan + 1;\n"
         f"  IF nScan >= {RESTART_SCANS} THEN\n    nScan := 0;\n    fW := 360.0 - fW;\n  END_IF;\n"
         "  fT := INT_TO_REAL(nScan) * 0.1;\n"
@@ -59,24 +60,6 @@ def program(with_block: bool, order: int = 1, ratio: float = 0.0) -> str:
         "  IF fW < 180.0 THEN\n    fX := 360.0 - fX;\n    fY0 := 67.6;\n  END_IF;\n"
         f"{call}END_PROGRAM\n\n" + BENCH_CONFIGURATION
     )
-
-
-def scan_times(text: str, scans: int) -> tuple[float, float, object]:
-    """CPU microseconds per scan of the program after the warm-up, its longest single scan, and the
-    application."""
-    from plc.st.compiler import load_application
-
-    app = load_application(library_sources() + [("bench_program.st", text)])
-    for _ in range(WARMUP_SCANS):
-        app.scan()
-    longest = total = 0
-    for _ in range(scans):
-        start = time.process_time_ns()
-        app.scan()
-        took = time.process_time_ns() - start
-        total += took
-        longest = max(longest, took)
-    return total / scans / 1e3, longest / 1e3, app
 
 
 def heatup_cost(quick: bool, order: int = 1, ratio: float = 0.0) -> tuple[float, float, float]:

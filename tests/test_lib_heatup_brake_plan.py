@@ -127,7 +127,7 @@ def test_the_plan_goes_its_share_of_the_way_to_the_longest_pulse(fn: ScanDriver)
     assert e < 0.0 or run(fn, fA=beyond, fEMax=beyond).get("fPostFor") < 1.0 - PEAK_SHARE
 
 
-@pytest.mark.parametrize(("l_away", "a_first"), [(0.5, 0.5), (L_AWAY, 0.0), (L_AWAY, A_MAX)],
+@pytest.mark.parametrize(("l_away", "a_first"), [(1.0, 0.5), (L_AWAY, 0.0), (L_AWAY, A_MAX)],
                          ids=["no brake at the other limit", "no first plan", "first plan at the longest"])
 def test_no_plan_where_a_brake_cannot_help(fn: ScanDriver, l_away: float, a_first: float) -> None:
     got = run(fn, fLAway=l_away, fAFirst=a_first)

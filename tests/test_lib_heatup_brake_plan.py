@@ -19,16 +19,17 @@ L_TOWARD, L_AWAY = 60.0 / 25.0, -40.0 / 25.0  # (Ylim - Y0) / (Yh - Y0): 100 % a
 PEAK_SHARE = 0.0025
 A_MAX = 3.0
 
-DECLS = """    fRatio, fA, fL, fE, fLAway, fPeak, fPostMin, fEMax, fEFor, fPostFor, fAFirst, fAPlan, fEPlan, fReach,
-    fFirst : REAL;"""
-BODY = f"""  fPeak := FC_HeatUpTwoLagBrakePeak(fRatio := fRatio, fA := fA, fL := fL, fE := fE, fLAway := fLAway,
-                                    fPostMin => fPostMin);
+DECLS = """    fRatio, fA, fL, fE, fLAway, fPeak, fPostMin, fEMax, fEFor, fPostFor : REAL;
+    fAFirst, fAPlan, fEPlan, fReach, fFirst : REAL;"""
+BODY = f"""  fPeak := FC_HeatUpTwoLagBrakePeak(fRatio := fRatio, fA := fA, fL := fL, fE := fE,
+                                    fLAway := fLAway, fPostMin => fPostMin);
   fEFor := FC_HeatUpLagBrakeFor(fRatio := fRatio, fA := fA, fLToward := fL, fLAway := fLAway, fEMax := fEMax,
                                 fPostMin => fPostFor);
   fFirst := FC_HeatUpNLagPlan(nOrder := 2, fRatio := fRatio, fLToward := fL, fLAway := fLAway, fD := 0.0,
                               fB := 0.0, fXStart := 0.0, fAMax := {A_MAX});
   fAPlan := FC_HeatUpLagBrakePlan(fRatio := fRatio, fLToward := fL, fLAway := fLAway, fAFirst := fAFirst,
-                                  fAMax := {A_MAX}, fMinBrake := 0.0001, fReach := fReach, fBrake => fEPlan);"""
+                                  fAMax := {A_MAX}, fMinBrake := 0.0001, fReach := fReach,
+                                  fBrake => fEPlan);"""
 
 
 def step(x: np.ndarray, rho: float) -> np.ndarray:

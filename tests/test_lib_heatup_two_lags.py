@@ -1,20 +1,19 @@
 """Model-based setpoint response planned on two unequal lags (a TCLab-like heater: block 16.7 s behind its
-heater, sensor 140 s behind the block) over the library's FB_TempController on the soft-PLC.
-
-The model is the one TUNE publishes for such a plant: nTuneOrder 2, fTuneLagRatio = rho and the two-point
-FOPDT of the two lags; the PID is AMIGO's on that FOPDT. A step from rest lands within the goals, sooner
-than one switch can: a longer pulse, then a brake at the other limit (one switch landed the nominal step at
-1.09 x the bound; the bound, one switch too, overshoots 2 % to enter the band early). A plant
-whose rise clearly differs from the model's gets its pulse planned again on the lags the rise shows (its
-slope the slow lag, its level the fast one). A faster rise (a faster sensor, a stronger heater: the slope
-cannot tell them apart) is planned on the lag seen, with a brake half the way to the longest it allows
-(without the new plan, a sensor 30 % faster overshot 16.5 %; with the brake as far as the model's, 2.85 %); a
-slower one (a slower sensor, a weaker heater) halfway to it, on the square root of its scale (planned on
-the model's lags, a sensor 30 % slower overshot 2.75 %; on the lag seen, a 20 % weaker heater stalled below
-W, 1.62 x the bound; with a brake, that heater took 1.51 x), with one switch. The PID follows the path, its integrator resting while the path is farther from W
-than the settling band (a plant that lags the path would otherwise wind it up), unless X runs ahead of the
-path (a stronger heater: its integral takes off the power it does not need). The figures of the cases that
-miss the goals are expected failures that state them.
+heater, sensor 140 s behind the block) over the library's FB_TempController on the soft-PLC. The model is the
+one TUNE publishes for such a plant: nTuneOrder 2, fTuneLagRatio = rho and the two-point FOPDT of the two
+lags; the PID is AMIGO's on that FOPDT. A step from rest lands within the goals, sooner than one switch can: a
+longer pulse, then a brake at the other limit (one switch landed the nominal step at 1.09 x the bound; the
+bound, one switch too, overshoots 2 % to enter the band early). A plant whose rise clearly differs from the
+model's gets its pulse planned again on the lags the rise shows (its slope the slow lag, its level the fast
+one). A faster rise (a faster sensor, a stronger heater: the slope cannot tell them apart) is planned on the
+lag seen, with a brake half the way to the longest it allows (without the new plan, a sensor 30 % faster
+overshot 16.5 %; with the brake as far as the model's, 2.85 %); a slower one (a slower sensor, a weaker
+heater) halfway to it, on the square root of its scale (planned on the model's lags, a sensor 30 % slower
+overshot 2.75 %; on the lag seen, a 20 % weaker heater stalled below W, 1.62 x the bound; with a brake, that
+heater took 1.51 x), with one switch. The PID follows the path, its integrator resting while the path is
+farther from W than the settling band (a plant that lags the path would otherwise wind it up), unless X runs
+ahead of the path (a stronger heater: its integral takes off the power it does not need). The figures of the
+cases that miss the goals are expected failures that state them.
 At the TCLab's 0.2 degC noise one run's overshoot moves by a few tenths of a percent with the noise draw
 (0.075 degC is 0.5 % of the step), so the nominal step is held to the goals on the mean of NOMINAL_SEEDS
 noise draws, and the worst of them is printed.

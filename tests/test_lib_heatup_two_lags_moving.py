@@ -1,14 +1,14 @@
-"""A setpoint step on two unequal lags far apart (seed 000's platform: a bath of about 1,800 s behind a loop of
-about 50 s and 8 s of transport) while the plant still moves: the second step comes while the first
+"""A setpoint step on two unequal lags far apart (seed 000's platform: a bath of about 1,800 s behind a loop
+of about 50 s and 8 s of transport) while the plant still moves: the second step comes while the first
 response's path still runs, so it does not start from rest. (In seed 000's scenario the first response is
-the one planned at the hand-over from TUNE; here it is a step from rest whose model's gain is 10 % high, as
-a tuned model's may be: exact, its pulse and brake would land the plant at rest.) The slow lag holds almost
-all of that motion, and the rest at X0 with the output that holds X0 stops it at once, as it does a first-
-order lag's; only the motion over the delay and the short lag goes on. The response is then planned on the
-two lags as from rest. Planned on the model's two-point FOPDT instead (the first-order plan, which a moving
-start used to get), the path reaches W one dead time after the switch while the plant approaches on its
-short lag: the PID, acting on the difference, drove seed 000's split-range cool-down past W; on this heating
-step it leaves the plant creeping in on the integral.
+the one planned at the hand-over from TUNE; here it is a step from rest whose model's gain is 10 % high,
+as a tuned model's may be: exact, its pulse and brake would land the plant at rest.) The slow lag holds
+almost all of that motion, and the rest at X0 with the output that holds X0 stops it at once, as it does a
+first- order lag's; only the motion over the delay and the short lag goes on. The response is then planned
+on the two lags as from rest. Planned on the model's two-point FOPDT instead (the first-order plan, which
+a moving start used to get), the path reaches W one dead time after the switch while the plant approaches
+on its short lag: the PID, acting on the difference, drove seed 000's split-range cool-down past W; on
+this heating step it leaves the plant creeping in on the integral.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ TS = 0.5  # s: the controller's cycle
 REST_S = 1000.0  # at rest at ambient, longer than the rest filter's settling (5 x T / 10)
 SECOND_STEP_AFTER_SWITCH_S = 250.0  # the first path is near W1, still moving: the step is not from rest
 HORIZON_S = 1500.0  # after the second step
-FIRST_GAIN_SCALE = 1.1  # the first response's model gain over the plant's: its landing leaves the plant moving
+FIRST_GAIN_SCALE = 1.1  # the first response's model gain over the plant's: its landing leaves it moving
 NOISE = 0.01  # degC, seed 000's sensor
 MIN_STEP = 1.0  # degC: the steps are smaller than the default 5 degC (seed 000's 2 degC step sets it so too)
 SEED = 3

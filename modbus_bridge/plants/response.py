@@ -223,8 +223,9 @@ def _is_linear(plant: Plant) -> bool:
 
 
 def bang_hold_bound(pm: PlantModel, y0: float, r: float, dt: float, horizon_s: float) -> BangHold:
-    """The fastest 2 % settling an output limited to the actuator range can give from rest at y0 to r:
-    full power (or full cooling), then the holding power, switched at the best time (grid of dt). The other
+    """The fastest 2 % settling one switch within the actuator range gives from rest at y0 to r: full power
+    (or full cooling), then the holding power, switched at the best time (grid of dt); the time-optimal input
+    of a first-order lag, which a plant of higher order can beat with a brake between the two. The other
     channels of a multi-channel plant keep the input that held the start; the holding power is the one
     that holds r beside them.
 

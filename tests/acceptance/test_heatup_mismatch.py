@@ -1,0 +1,92 @@
+"""The model-based setpoint response under model mismatch through Modbus, on the shipped scenarios that run
+it beside their PID: the zone tunes on the nominal plant; when the scored step starts, the plant's time
+constants (and, where the plant has one that can change, its dead time) are 30 % shorter or longer, so the
+model the plan starts from is off by that much. Goals on the true temperature: overshoot <= 2 % and 2 %
+settling within 1.5x the bang-hold bound of the changed plant (SHORTFALLS: cases that miss the settling goal,
+an expected failure once the overshoot goal has passed). Seed 003's hot end and the n-lag oven have
+tests of their own (test_heatup.py, test_heatup_oven.py); the FOPDT's dead time is covered in the library
+tests (test_lib_heatup.py). CI runs QUICK; THERMOST_SLOW=1 runs every case."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+
+import pytest
+
+from modbus_bridge.optimise.robustness import plant_model, scored_step
+from modbus_bridge.plants.response import PlantModel, bang_hold_bound
+from modbus_bridge.scenario import Disturbance, Scenario, load_scenario, resolve_scenario
+
+from .conftest import run_scenario
+
+SLOW_ENV = "THERMOST_SLOW"
+VARIANT = "model-based PID"
+SCENARIOS = ("seed000_forming_platform", "t1_rrf_hotend", "t4_tclab", "t6_nonlinear_hotend")
+SCALES = (0.7, 1.3)
+MISMATCH_OVERSHOOT_PCT, MISMATCH_BOUND_RATIO = 2.0, 1.5
+QUICK = {("seed000_forming_platform", "T", 0.7)}
+# the settling goal not met yet (the overshoot goal holds in every case): the figures when last measured
+SHORTFALLS: dict[tuple[str, str, float], str] = {
+    ("seed000_forming_platform", "T", 0.7): (
+        "the rise's line reads the slow lag as 0.55 of the model's (the plant's is 0.7), so the pulse "
+        "planned again ends early, X lands about 30 % of the step short and creeps in on the bath's lag: "
+        "1.78 x (1.35 % overshoot)"),
+    ("seed000_forming_platform", "T", 1.3): (
+        "a slower rise is planned on a lag between the model's and the one seen, with one switch (a weaker "
+        "heater cannot be told from it); X lands short and creeps in on the bath's lag: 1.51 x (1.74 %)"),
+}
+KINDS = {"T": "model_mismatch", "L": "dead_time_mismatch"}
+
+
+def _changes_dead_time(sc: Scenario) -> bool:
+    return hasattr(sc.build_plant(), "set_dead_time") and float(sc.plant_params.get("dead_time_s", 0.0)) > 0.0
+
+
+def cases():
+    for name in SCENARIOS:
+        sc = load_scenario(resolve_scenario(name))
+        for kind in ("T", "L") if _changes_dead_time(sc) else ("T",):
+            for scale in SCALES:
+                yield pytest.param(name, kind, scale, id=f"{name}-{kind}x{scale}")
+
+
+def changed(sc: Scenario, kind: str, scale: float) -> tuple[Scenario, PlantModel]:
+    """The scenario with the plant changed at the start of its scored step, and that plant's model."""
+    scored, _, _ = scored_step(sc)
+    zone = sc.zones[0]
+    phases = list(zone.phases)
+    step = phases[scored]
+    phases[scored] = dataclasses.replace(step, disturbances=[Disturbance(KINDS[kind], 0.0, scale),
+                                                             *step.disturbances])
+    variants = [v for v in sc.variants if v.name == VARIANT]
+    sc = dataclasses.replace(sc, zones=[dataclasses.replace(zone, phases=phases), *sc.zones[1:]],
+                             variants=variants)
+    pm = plant_model(sc)
+    params = ({**pm.params, "time_constant_scale": scale} if kind == "T"
+              else {**pm.params, "dead_time_s": float(pm.params["dead_time_s"]) * scale})
+    return sc, PlantModel(pm.model, params, pm.channel)
+
+
+@pytest.mark.parametrize(("name", "kind", "scale"), list(cases()))
+def test_the_model_based_step_meets_the_mismatch_goals(harness, name, kind, scale):
+    if (name, kind, scale) not in QUICK and not os.environ.get(SLOW_ENV):
+        pytest.skip(f"{name} {kind} x{scale}: extra closed-loop run (CI time); set {SLOW_ENV}=1")
+    sc, pm = changed(load_scenario(resolve_scenario(name)), kind, scale)
+    assert sc.variants, f"{name}: no variant named {VARIANT!r}"
+    [(result, metrics)] = run_scenario(harness, sc)
+    assert result.error is None, result.error
+    scored, y0, r = scored_step(sc)
+    phase = sc.zones[0].phases[scored]
+    bound = bang_hold_bound(pm, y0, r, sc.dt_s, phase.duration_s)
+    step = {m.phase: m for m in metrics}[phase.name].values
+    settling, overshoot = step["true_settling_time_2pct_s"], step["true_overshoot_pct"]
+    print(f"{name} {kind} x{scale}: bound {bound.settling_s:.1f} s; model-based {settling:.1f} s = "
+          f"{settling / bound.settling_s:.2f} x, true overshoot {overshoot:.2f} %")
+    assert overshoot <= MISMATCH_OVERSHOOT_PCT
+    within = settling <= MISMATCH_BOUND_RATIO * bound.settling_s
+    why = SHORTFALLS.get((name, kind, scale))
+    if why is not None:
+        assert not within, f"{name} {kind} x{scale} now meets the settling goal: take it out of SHORTFALLS"
+        pytest.xfail(f"known shortfall: {why}")
+    assert within

@@ -15,13 +15,12 @@ import os
 import pytest
 
 from modbus_bridge.optimise.robustness import plant_model, scored_step
-from modbus_bridge.plants.response import PlantModel, bang_hold_bound
+from modbus_bridge.plants.response import PlantModel
 from modbus_bridge.scenario import Disturbance, Scenario, load_scenario, resolve_scenario
 
-from .conftest import run_scenario
+from .heatup_step import model_based_step
 
 SLOW_ENV = "THERMOST_SLOW"
-VARIANT = "model-based PID"
 SCENARIOS = ("seed000_forming_platform", "t1_rrf_hotend", "t4_tclab", "t6_nonlinear_hotend")
 SCALES = (0.7, 1.3)
 MISMATCH_OVERSHOOT_PCT, MISMATCH_BOUND_RATIO = 2.0, 1.5
@@ -59,9 +58,7 @@ def changed(sc: Scenario, kind: str, scale: float) -> tuple[Scenario, PlantModel
     step = phases[scored]
     phases[scored] = dataclasses.replace(step, disturbances=[Disturbance(KINDS[kind], 0.0, scale),
                                                              *step.disturbances])
-    variants = [v for v in sc.variants if v.name == VARIANT]
-    sc = dataclasses.replace(sc, zones=[dataclasses.replace(zone, phases=phases), *sc.zones[1:]],
-                             variants=variants)
+    sc = dataclasses.replace(sc, zones=[dataclasses.replace(zone, phases=phases), *sc.zones[1:]])
     pm = plant_model(sc)
     params = ({**pm.params, "time_constant_scale": scale} if kind == "T"
               else {**pm.params, "dead_time_s": float(pm.params["dead_time_s"]) * scale})
@@ -73,18 +70,9 @@ def test_the_model_based_step_meets_the_mismatch_goals(harness, name, kind, scal
     if (name, kind, scale) not in QUICK and not os.environ.get(SLOW_ENV):
         pytest.skip(f"{name} {kind} x{scale}: extra closed-loop run (CI time); set {SLOW_ENV}=1")
     sc, pm = changed(load_scenario(resolve_scenario(name)), kind, scale)
-    assert sc.variants, f"{name}: no variant named {VARIANT!r}"
-    [(result, metrics)] = run_scenario(harness, sc)
-    assert result.error is None, result.error
-    scored, y0, r = scored_step(sc)
-    phase = sc.zones[0].phases[scored]
-    bound = bang_hold_bound(pm, y0, r, sc.dt_s, phase.duration_s)
-    step = {m.phase: m for m in metrics}[phase.name].values
-    settling, overshoot = step["true_settling_time_2pct_s"], step["true_overshoot_pct"]
-    print(f"{name} {kind} x{scale}: bound {bound.settling_s:.1f} s; model-based {settling:.1f} s = "
-          f"{settling / bound.settling_s:.2f} x, true overshoot {overshoot:.2f} %")
-    assert overshoot <= MISMATCH_OVERSHOOT_PCT
-    within = settling <= MISMATCH_BOUND_RATIO * bound.settling_s
+    step = model_based_step(harness, sc, f"{name} {kind} x{scale}", true_plant=pm)
+    assert step.overshoot_pct <= MISMATCH_OVERSHOOT_PCT
+    within = step.settling_s <= MISMATCH_BOUND_RATIO * step.bound_s
     why = SHORTFALLS.get((name, kind, scale))
     if why is not None:
         assert not within, f"{name} {kind} x{scale} now meets the settling goal: take it out of SHORTFALLS"

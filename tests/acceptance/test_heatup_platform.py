@@ -7,31 +7,15 @@ the band early), overshoot <= 0.5 %."""
 
 from __future__ import annotations
 
-import dataclasses
-
-from modbus_bridge.optimise.robustness import plant_model, scored_step
-from modbus_bridge.plants.response import bang_hold_bound
 from modbus_bridge.scenario import load_scenario, resolve_scenario
 
-from .conftest import run_scenario
+from .heatup_step import model_based_step
 
 SCENARIO = "seed000_forming_platform"
-VARIANT = "model-based PID"
 BOUND_RATIO, OVERSHOOT_PCT = 1.05, 0.5
 
 
 def test_the_platform_s_cool_down_enters_the_band_before_one_switch_could(harness):
-    sc = load_scenario(resolve_scenario(SCENARIO))
-    sc = dataclasses.replace(sc, variants=[v for v in sc.variants if v.name == VARIANT])
-    [(result, metrics)] = run_scenario(harness, sc)
-    assert result.error is None, result.error
-    step = {m.phase: m for m in metrics}["step"].values
-    scored, y0, r = scored_step(sc)
-    horizon = sc.zones[0].phases[scored].duration_s  # the bound over the step phase the test judges
-    bound = bang_hold_bound(plant_model(sc), y0, r, sc.dt_s, horizon)
-    settling = step["true_settling_time_2pct_s"]
-    print(f"{SCENARIO}: bound {bound.settling_s:.1f} s (one switch, {bound.overshoot_pct:.2f} %); "
-          f"model-based {settling:.1f} s = {settling / bound.settling_s:.2f} x, "
-          f"true overshoot {step['true_overshoot_pct']:.2f} %")
-    assert settling <= BOUND_RATIO * bound.settling_s
-    assert step["true_overshoot_pct"] <= OVERSHOOT_PCT
+    step = model_based_step(harness, load_scenario(resolve_scenario(SCENARIO)), SCENARIO)
+    assert step.settling_s <= BOUND_RATIO * step.bound_s
+    assert step.overshoot_pct <= OVERSHOOT_PCT

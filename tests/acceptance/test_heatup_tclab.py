@@ -8,18 +8,13 @@ nominal goal, not met: the known shortfall below)."""
 
 from __future__ import annotations
 
-import dataclasses
-
 import pytest
 
-from modbus_bridge.optimise.robustness import plant_model, scored_step
-from modbus_bridge.plants.response import bang_hold_bound
 from modbus_bridge.scenario import load_scenario, resolve_scenario
 
-from .conftest import run_scenario
+from .heatup_step import ScoredStep, model_based_step
 
 SCENARIO = "t4_tclab"
-VARIANT = "model-based PID"
 BOUND_RATIO, MISMATCH_OVERSHOOT_PCT, NOMINAL_OVERSHOOT_PCT = 1.05, 2.0, 0.5
 SHORTFALL = (
     "0.74 % true overshoot: the identified gain is 1.7 % below the plant's at the step, so the plan switches "
@@ -29,30 +24,16 @@ SHORTFALL = (
 
 
 @pytest.fixture(scope="module")
-def tclab_step(harness) -> tuple[dict, float]:
-    """The step phase's metrics and the bound, from one run for both tests."""
-    sc = load_scenario(resolve_scenario(SCENARIO))
-    sc = dataclasses.replace(sc, variants=[v for v in sc.variants if v.name == VARIANT])
-    [(result, metrics)] = run_scenario(harness, sc)
-    assert result.error is None, result.error
-    scored, y0, r = scored_step(sc)
-    horizon = sc.zones[0].phases[scored].duration_s
-    bound = bang_hold_bound(plant_model(sc), y0, r, sc.dt_s, horizon)
-    step = {m.phase: m for m in metrics}[sc.zones[0].phases[scored].name].values
-    print(f"{SCENARIO}: bound {bound.settling_s:.1f} s (one switch, {bound.overshoot_pct:.2f} %); "
-          f"model-based {step['true_settling_time_2pct_s']:.1f} s = "
-          f"{step['true_settling_time_2pct_s'] / bound.settling_s:.2f} x, "
-          f"true overshoot {step['true_overshoot_pct']:.2f} %")
-    return step, bound.settling_s
+def tclab_step(harness) -> ScoredStep:
+    """One run for both tests."""
+    return model_based_step(harness, load_scenario(resolve_scenario(SCENARIO)), SCENARIO)
 
 
 def test_the_tclab_step_enters_the_band_with_the_bound_and_within_the_mismatch_overshoot(tclab_step):
-    step, bound_s = tclab_step
-    assert step["true_settling_time_2pct_s"] <= BOUND_RATIO * bound_s
-    assert step["true_overshoot_pct"] <= MISMATCH_OVERSHOOT_PCT
+    assert tclab_step.settling_s <= BOUND_RATIO * tclab_step.bound_s
+    assert tclab_step.overshoot_pct <= MISMATCH_OVERSHOOT_PCT
 
 
 @pytest.mark.xfail(reason=f"known shortfall: {SHORTFALL}", strict=True)
 def test_the_tclab_step_meets_the_nominal_overshoot(tclab_step):
-    step, _ = tclab_step
-    assert step["true_overshoot_pct"] <= NOMINAL_OVERSHOOT_PCT
+    assert tclab_step.overshoot_pct <= NOMINAL_OVERSHOOT_PCT

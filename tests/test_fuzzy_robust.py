@@ -17,6 +17,8 @@ AGGRESSIVE = {"fKp": 5.32, "fTn": 22.2, "fTv": 3.58, "fTd": 0.9}
 # a cautious set on the same model (SIMC-like PI, Ms about 1.5)
 CAUTIOUS = {"fKp": 1.9, "fTn": 23.2, "fTv": 0.0, "fTd": 0.0}
 MS_MAX = 2.0
+# FB_FuzzyMsBound: the configured box, the quarter box, 12 bisections, the box found: one box per cycle
+BOX_SEARCH_CYCLES_MAX = 15
 
 DECLS = """    sCtrl : ST_ControllerParameter;
     sFz : ST_FuzzyParameter;
@@ -47,6 +49,17 @@ def driver(base: dict[str, float], model: dict[str, float], **fuzzy: float) -> S
     drv.set("bEnable", True)
     return drv
 
+
+
+def search_box(drv: ScanDriver) -> int:
+    """Control cycles until the gain box is searched (the first cycle starts the search)."""
+    cycles = 0
+    while True:
+        drv.scan()
+        cycles += 1
+        if not drv.get("fbAd.fbBound.bBusy"):
+            return cycles
+        assert cycles <= BOX_SEARCH_CYCLES_MAX, "the gain box search does not end"
 
 
 def approach(drv: ScanDriver, x_first: float, x_second: float) -> tuple[float, float, float]:
@@ -101,7 +114,8 @@ def test_sign_band_keeps_the_side_inside_the_noise() -> None:
 
 def test_aggressive_base_set_is_scaled_until_every_reachable_set_keeps_the_limit() -> None:
     drv = driver(AGGRESSIVE, MODEL, fMsMax=MS_MAX)
-    drv.scan()
+    assert search_box(drv) == BOX_SEARCH_CYCLES_MAX  # one box per cycle, so the scale took all of them
+    assert drv.get("fbAd.fbBound.nBoxes") == BOX_SEARCH_CYCLES_MAX
     assert ms_of(*corner_set(AGGRESSIVE, 1.0, 1.0, 1.0), *MODEL.values()) > 4.0  # the base set itself
     scale = drv.get("fbAd.fGainScale")
     assert 0.2 < scale < 1.0
@@ -115,7 +129,7 @@ def test_aggressive_base_set_is_scaled_until_every_reachable_set_keeps_the_limit
 
 def test_robust_base_set_keeps_the_whole_box() -> None:
     drv = driver(CAUTIOUS, MODEL, fMsMax=MS_MAX, fKpRatioMax=1.2, fKiRatioMax=1.2)
-    drv.scan()
+    assert search_box(drv) == 1  # the configured box holds: one box evaluated, and it is the one in use
     assert drv.get("fbAd.fGainScale") == 1.0 and drv.get("fbAd.fBoxShare") == 1.0
     worst = max(ms_of(*corner_set(CAUTIOUS, *c), *MODEL.values()) for c in box_corners(drv))
     assert worst <= MS_MAX
@@ -124,7 +138,7 @@ def test_robust_base_set_keeps_the_whole_box() -> None:
 def test_written_gains_stay_inside_the_box_while_the_error_moves() -> None:
     drv = driver(AGGRESSIVE, MODEL, fMsMax=MS_MAX, fKe=0.5, fKec=4.0)
     rng = np.random.default_rng(3)
-    drv.scan()
+    search_box(drv)
     lo = drv.get("fbAd.fbBound.fKpLo") * AGGRESSIVE["fKp"]
     hi = drv.get("fbAd.fbBound.fKpHi") * AGGRESSIVE["fKp"]
     for x in 100.0 + np.cumsum(rng.normal(0.0, 1.5, 300)):
@@ -142,9 +156,39 @@ def test_bound_off_keeps_the_configured_box() -> None:
 
 def test_a_new_base_set_recomputes_the_bound() -> None:
     drv = driver(CAUTIOUS, MODEL, fMsMax=MS_MAX)
-    drv.scan()
+    search_box(drv)
     assert drv.get("fbAd.fGainScale") == 1.0
     for name, value in AGGRESSIVE.items():  # the tuner (or an HMI) writes a new set
         drv.set(f"sCtrl.{name}", value)
-    drv.scan()
+    assert search_box(drv) == BOX_SEARCH_CYCLES_MAX
     assert drv.get("fbAd.fGainScale") < 1.0
+
+
+def test_the_base_set_alone_is_used_while_the_box_is_searched() -> None:
+    drv = driver(AGGRESSIVE, MODEL, fMsMax=MS_MAX, fKe=0.5, fKec=4.0)
+    drv.set("fX", 90.0)  # 10 degC below W: the rules ask for other gains at once
+    for cycle in range(1, BOX_SEARCH_CYCLES_MAX):
+        drv.scan()
+        assert drv.get("fbAd.fbBound.bBusy"), cycle
+        assert drv.get("fbAd.fbBound.nBoxes") == cycle  # never more than one box in a cycle
+        assert drv.get("fbAd.fMsReachable") == 0.0
+        assert drv.get("sCtrl.fKp") == pytest.approx(AGGRESSIVE["fKp"], rel=1e-6)
+        assert drv.get("sCtrl.fTn") == pytest.approx(AGGRESSIVE["fTn"], rel=1e-6)
+    drv.scan()
+    assert not drv.get("fbAd.fbBound.bBusy")
+    assert drv.get("sCtrl.fKp") <= drv.get("fbAd.fbBound.fKpHi") * AGGRESSIVE["fKp"] * (1 + 1e-6)
+    assert drv.get("fbAd.fMsReachable") == pytest.approx(MS_MAX, abs=0.05)
+
+
+def test_an_adapter_that_is_off_searches_no_box_and_builds_no_table_until_it_is_switched_on() -> None:
+    drv = driver(AGGRESSIVE, MODEL, fMsMax=MS_MAX, bQueryTable=True, nQueryHalf=2, nQueryCellsPerCycle=5)
+    drv.set("bEnable", False)
+    for _ in range(2 * BOX_SEARCH_CYCLES_MAX):
+        drv.scan()
+    assert drv.get("fbAd.fbBound.nBoxes") == 0 and drv.get("fbAd.fMsReachable") == 0.0
+    assert drv.get("fbAd.nBuildIdx") == 0 and not drv.get("fbAd.bTableReady")
+    assert drv.get("sCtrl.fKp") == pytest.approx(AGGRESSIVE["fKp"], rel=1e-6)
+    drv.set("bEnable", True)
+    assert search_box(drv) == BOX_SEARCH_CYCLES_MAX
+    assert 0.2 < drv.get("fbAd.fGainScale") < 1.0
+    assert drv.get("fbAd.bTableReady")  # 25 nodes, 5 a cycle

@@ -120,9 +120,14 @@ def _robustness_text(z: ZoneModel) -> str:
     if reachable is None:
         return "Ms over reachable sets: not read yet"
     if not reachable:
-        why = "Ms bound off (fFuzzyMsMax <= 1)" if bound is not None and bound <= 1.0 else \
-            "no identified model or no valid base set yet"
-        return f"Ms over reachable sets not bounded: {why}; the configured ratio box is used."
+        if z.has("fuzzy") and p.value(z["fuzzy"]) is not None and not p.value(z["fuzzy"]):
+            return "Ms over reachable sets: the gain box is searched once the adapter is on."
+        if bound is not None and bound <= 1.0:
+            return "Ms over reachable sets not bounded: Ms bound off (fFuzzyMsMax <= 1); the configured " \
+                   "ratio box is used."
+        return ("Ms over reachable sets not bounded yet: no identified model or no valid base set (the "
+                "configured ratio box is used), or the box is being searched (at most 15 control cycles, "
+                "on the base gains).")
     text = f"Ms over reachable sets {value_text(z['fz_ms_reachable'], decimals=3)}"
     if bound is not None:
         holds = float(reachable) <= float(bound) * (1.0 + MS_TOLERANCE)

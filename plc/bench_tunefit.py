@@ -1,4 +1,4 @@
-"""Scan cost of the self-tuner's closing fit, FC_TuneFitNLag, in the soft-PLC (`thermost bench` calls
+"""Scan cost of the self-tuner's closing fit, FB_TuneFitNLag, in the soft-PLC (`thermost bench` calls
 `run(quick)`).
 
 The fit runs once, in the scan that ends a TUNE: least squares over the whole step record for chains of
@@ -51,17 +51,17 @@ def _rise(r: Record) -> str:
 
 
 def program(r: Record, with_fit: bool) -> str:
-    call = (f"    bOk := FC_TuneFitNLag(fTuTangent := {r.tangent_delay_s!r}, fStart := 0.0, "
-            f"fSpacing := {r.spacing_s!r}, nCount := {HIST_POINTS},\n"
-            f"                          fDeltaY := {STEP_PCT!r}, aHist := aHist,\n"
-            "                          fKs => fKs, fTu => fTu, fTg => fTg, nOrder => nOrder, fLag => fLag,\n"
-            "                          fRatio => fRatio, fDelay => fDelay, fRmsPercent => fRms);\n"
+    call = (f"    fbFit(bStart := TRUE, nBudget := 0, fTuTangent := {r.tangent_delay_s!r}, fStart := 0.0, "
+            f"fSpacing := {r.spacing_s!r},\n"
+            f"          nCount := {HIST_POINTS}, fDeltaY := {STEP_PCT!r}, aHist := aHist);\n"
+            "    bOk := fbFit.bOk;\n    fKs := fbFit.fKs;\n    fTu := fbFit.fTu;\n    nOrder := fbFit.nOrder;\n"
+            "    fRatio := fbFit.fRatio;\n"
             if with_fit else "")
     return (
         "PROGRAM P_Bench\n  VAR\n    aHist : T_TuneHistory;\n    bFilled : BOOL;\n    nK : INT;\n"
         "    fT : REAL;\n    bOk : BOOL;\n    fKs : REAL;\n    fTu : REAL;\n    fTg : REAL;\n"
-        "    nOrder : INT;\n    fLag : REAL;\n"
-        "    fRatio : REAL;\n    fDelay : REAL;\n    fRms : REAL;\n  END_VAR\n"
+        "    nOrder : INT;\n"
+        "    fRatio : REAL;\n    fbFit : FB_TuneFitNLag;\n  END_VAR\n"
         "  IF NOT bFilled THEN\n"
         f"    FOR nK := 0 TO {HIST_POINTS - 1} DO\n"
         f"      fT := INT_TO_REAL(nK + 1) * {r.spacing_s!r} - {r.delay_s!r};\n"
@@ -73,7 +73,7 @@ def program(r: Record, with_fit: bool) -> str:
 
 
 def fit_cost(r: Record, quick: bool) -> tuple[float, str]:
-    """Milliseconds per FC_TuneFitNLag call (baseline subtracted) and the model it chose."""
+    """Milliseconds per FB_TuneFitNLag call (baseline subtracted) and the model it chose."""
     calls = CALLS_QUICK if quick else CALLS_FULL
     # one scan first: it builds the record
     total, app = time_scans(program(r, True), calls, warmup=1)
@@ -89,7 +89,7 @@ def fit_cost(r: Record, quick: bool) -> tuple[float, str]:
 
 def run(quick: bool) -> None:
     calls = CALLS_QUICK if quick else CALLS_FULL
-    print(f"FC_TuneFitNLag, the fit in the scan that ends a TUNE, in the soft-PLC ({calls} calls per record, "
+    print(f"FB_TuneFitNLag, the fit in the scan that ends a TUNE, in the soft-PLC ({calls} calls per record, "
           "baseline subtracted)")
     for r in RECORDS:
         try:

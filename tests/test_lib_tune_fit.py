@@ -1,4 +1,4 @@
-"""FC_TuneFitNLag's rule for a lag longer than its record, on noise-free first-order records written into the
+"""FB_TuneFitNLag's rule for a lag longer than its record, on noise-free first-order records written into the
 self-tuner's history: up to three records the lag is fitted; beyond, only while the record departs from its
 least-squares straight line by more than twice the noise peak-to-peak (and never beyond ten records); the
 threshold is met from both sides with the record's own line residual."""
@@ -17,7 +17,7 @@ COUNT = 47  # entries recorded
 SPACING_S = 1.6
 DELAY_S = 4.0
 GAIN_C = 400.0  # the step's whole rise, degC
-CURVE_NOISE_RATIO = 2.0  # FC_TuneFitNLag's fCurveNoiseRatio
+CURVE_NOISE_RATIO = 2.0  # FB_TuneFitNLag's fCurveNoiseRatio
 LAG_MATCH = 0.05  # a fitted lag within 5 % of the record's
 TIMES_S = SPACING_S * np.arange(1, COUNT + 1)  # when each entry was recorded, s after the step
 RECORD_S = COUNT * SPACING_S - DELAY_S  # the record after the delay
@@ -34,13 +34,21 @@ DECLS = """    aHist : T_TuneHistory;
     fLag : REAL;
     fRatio : REAL;
     fDelay : REAL;
-    fRms : REAL;"""
+    fRms : REAL;
+    fbFit : FB_TuneFitNLag;"""
 
 BODY = f"""  IF bRun THEN
-    bOk := FC_TuneFitNLag(fTuTangent := fTangent, fStart := 0.0, fSpacing := {SPACING_S}, nCount := {COUNT},
-                          fDeltaY := 100.0, fNoisePp := fNoisePp, aHist := aHist, fKs => fKs, fTu => fTu,
-                          fTg => fTg, nOrder => nOrder, fLag => fLag, fRatio => fRatio, fDelay => fDelay,
-                          fRmsPercent => fRms);
+    fbFit(bStart := TRUE, nBudget := 0, fTuTangent := fTangent, fStart := 0.0, fSpacing := {SPACING_S},
+          nCount := {COUNT}, fDeltaY := 100.0, fNoisePp := fNoisePp, aHist := aHist);
+    bOk := fbFit.bOk;
+    fKs := fbFit.fKs;
+    fTu := fbFit.fTu;
+    fTg := fbFit.fTg;
+    nOrder := fbFit.nOrder;
+    fLag := fbFit.fLag;
+    fRatio := fbFit.fRatio;
+    fDelay := fbFit.fDelay;
+    fRms := fbFit.fRmsPercent;
     bRun := FALSE;
   END_IF;"""
 

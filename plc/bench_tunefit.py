@@ -54,8 +54,8 @@ def program(r: Record, with_fit: bool) -> str:
     call = (f"    fbFit(bStart := TRUE, nBudget := 0, fTuTangent := {r.tangent_delay_s!r}, fStart := 0.0, "
             f"fSpacing := {r.spacing_s!r},\n"
             f"          nCount := {HIST_POINTS}, fDeltaY := {STEP_PCT!r}, aHist := aHist);\n"
-            "    bOk := fbFit.bOk;\n    fKs := fbFit.fKs;\n    fTu := fbFit.fTu;\n    nOrder := fbFit.nOrder;\n"
-            "    fRatio := fbFit.fRatio;\n"
+            "    bOk := fbFit.bOk;\n    fKs := fbFit.fKs;\n    fTu := fbFit.fTu;\n"
+            "    nOrder := fbFit.nOrder;\n    fRatio := fbFit.fRatio;\n"
             if with_fit else "")
     return (
         "PROGRAM P_Bench\n  VAR\n    aHist : T_TuneHistory;\n    bFilled : BOOL;\n    nK : INT;\n"

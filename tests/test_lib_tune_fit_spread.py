@@ -3,11 +3,16 @@ budget, bounded work per cycle, and a TUNE that holds its step output until the 
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 import pytest
 
 from tests.st_helpers import ScanDriver, build_program, load_test_app
 from tests.test_lib_tuner import (
+    MODE_TUNE,
+    RULE_AUTO,
+    TUNE_ERROR,
     TUNE_READY,
     EqualLags,
     Fopdt,
@@ -21,6 +26,7 @@ HIST_POINTS = 64
 SPACING_S = 2.5
 STEP_PCT = 50.0
 STAGE_MAX = 17 * 16  # the largest stage: one round of the delay-and-lag search (nDelaySteps x nRefine)
+MAX_FIT_CYCLES = 100  # cycles the fit may hold the step for at the budget below (it needs about 15)
 OUTPUTS = ("bOk", "fKs", "fTu", "fTg", "nOrder", "fLag", "fRatio", "fDelay", "fRmsPercent", "nEvaluations")
 
 DECLS = """    aHist : T_TuneHistory;
@@ -80,7 +86,8 @@ def fit(app, kind: str, budget: int) -> tuple[dict, list[int]]:
 def test_the_fit_is_the_same_whatever_the_budget(app, kind: str) -> None:
     whole, calls = fit(app, kind, 0)
     assert len(calls) == 1 and whole["bOk"]
-    print(f"\n{kind}: order {whole['nOrder']}, ratio {whole['fRatio']:.3f}, {whole['nEvaluations']} residuals")
+    print(f"\n{kind}: order {whole['nOrder']}, ratio {whole['fRatio']:.3f}, "
+          f"{whole['nEvaluations']} residuals")
     for budget in (1, 300, 1000):
         spread, per_call = fit(app, kind, budget)
         assert spread == whole, f"budget {budget}"  # bit for bit: the same stages in the same order
@@ -94,37 +101,34 @@ def test_two_lags_are_still_found_when_spread(app) -> None:
     assert spread["nOrder"] == 2 and 0.05 < spread["fRatio"] < 0.2
 
 
-@pytest.mark.parametrize(("plant", "w", "y_tune"),
-                         [(Fopdt(k=2.0, t=23.4, l=10.6), 80.0, 50.0), (EqualLags(2.0, 20.0, 3), 80.0, 50.0),
-                          (TwoLags(k=0.6, t1=140.0, t2=16.7, noise=0.2, seed=1), 20.0 + 0.7 * 0.6 * 60.0, 60.0)],
-                         ids=["FOPDT", "3 lags", "two lags"])
-def test_a_spread_fit_tunes_the_same_set_and_holds_the_step_meanwhile(plant, w: float, y_tune: float) -> None:
-    import copy
+TWO_LAGS = TwoLags(k=0.6, t1=140.0, t2=16.7, noise=0.2, seed=1)
+TUNE_CASES = [(Fopdt(k=2.0, t=23.4, l=10.6), 80.0, 50.0), (EqualLags(2.0, 20.0, 3), 80.0, 50.0),
+              (TWO_LAGS, TWO_LAGS.x0 + 0.7 * TWO_LAGS.k * 60.0, 60.0)]
+FIT_BUDGET = 200.0
 
+
+@pytest.mark.parametrize(("plant", "w", "y_tune"), TUNE_CASES, ids=["FOPDT", "3 lags", "two lags"])
+def test_a_spread_fit_tunes_the_same_set_and_holds_the_step_meanwhile(plant, w: float, y_tune: float) -> None:
     one_scan, spread = tuner_driver(), tuner_driver()
     run_tune(one_scan, copy.deepcopy(plant), w=w, y_tune=y_tune)
     assert one_scan.get("nTuneState") == TUNE_READY
-    budget = 200.0
     outputs: list[float] = []
-    spread.set("sPar.fTuneFitBudget", budget)
+    spread.set("sPar.fTuneFitBudget", FIT_BUDGET)
     spread.set("sPar.fYTune", y_tune)
-    spread.set("nRule", 0)
+    spread.set("nRule", RULE_AUTO)
     spread.set("fbUut.fW1", w)
-    spread.set("nMode", 5)
+    spread.set("nMode", MODE_TUNE)
     p = copy.deepcopy(plant)
-    fitting = 0
-    for _ in range(20000):
+    while spread.get("nTuneState") != TUNE_READY:
+        assert spread.get("nTuneState") != TUNE_ERROR, spread.get("fbUut.nErrorId")
+        assert len(outputs) < MAX_FIT_CYCLES
         spread.set("fbUut.fX", p.measure())
         spread.scan()
         p.step(spread.get("fbUut.fY"))
         if spread.get("fbUut.fbTuner.bFitting"):
-            fitting += 1
             outputs.append(spread.get("fbUut.fY"))
-        if spread.get("nTuneState") == TUNE_READY:
-            break
-    assert spread.get("nTuneState") == TUNE_READY
     assert identified(spread) == identified(one_scan)
     assert spread.get("sPar.nTuneOrder") == one_scan.get("sPar.nTuneOrder")
     assert spread.get("sPar.fTuneLagRatio") == one_scan.get("sPar.fTuneLagRatio")
-    assert fitting > 1 and set(outputs) == {y_tune}  # the step output stays on while the fit runs
-    print(f"\nREADY {fitting} cycles after the record ended (budget {budget:.0f})")
+    assert len(outputs) > 1 and set(outputs) == {y_tune}  # the step output stays on while the fit runs
+    print(f"\nREADY {len(outputs)} cycles after the record ended (budget {FIT_BUDGET:.0f})")

@@ -6,11 +6,13 @@ takes more than twice as long. The
 hand-over from TUNE, the oven's lags still full of the step's heat, plans on the same model and the step's
 history: it peaks at most half as far past W as the PID alone does. With the oven's lags 30 % shorter or
 longer than TUNE saw (from the hand-over on), the heater monitor raises nothing, the step stays within the
-mismatch goals (2 % overshoot within 1.5x that plant's bound) and the response reports the lags it saw."""
+mismatch goals (2 % overshoot within 1.5x that plant's bound) and the response reports the lags it saw.
+CI runs the longer lags (QUICK); THERMOST_SLOW=1 runs both."""
 
 from __future__ import annotations
 
 import dataclasses
+import os
 
 import pytest
 
@@ -26,6 +28,8 @@ BOUND_RATIO, OVERSHOOT_PCT = 1.3, 0.5
 PID_ALONE_SLOWER = 2.0  # the PID alone's 2 % settling time over the model-based response's
 HAND_OVER_SHARE = 0.5  # of the PID alone's peak past W after TUNE
 LAGS_AFTER_TUNE = (0.7, 1.3)  # the oven's lags after TUNE, times what TUNE saw
+QUICK = (1.3,)
+SLOW_ENV = "THERMOST_SLOW"
 SEEN_LAGS_TOLERANCE = 0.1  # the lags the response reports, share of the true ones
 MISMATCH_BOUND_RATIO, MISMATCH_OVERSHOOT_PCT = 1.5, 2.0
 
@@ -79,6 +83,8 @@ def test_the_oven_lands_on_its_identified_n_lag_model(harness):
 
 @pytest.mark.parametrize("lags", LAGS_AFTER_TUNE)
 def test_an_oven_with_other_lags_than_its_model_lands_without_an_alarm(harness, lags: float):
+    if lags not in QUICK and not os.environ.get(SLOW_ENV):
+        pytest.skip(f"oven lags x{lags}: extra closed-loop run (CI time); set {SLOW_ENV}=1")
     sc, phases = _tune_settle_step(lags_after_tune=lags)
     sc = dataclasses.replace(sc, variants=[v for v in sc.variants if v.name == MODEL_BASED])
     [(result, metrics)] = run_scenario(harness, sc)

@@ -120,8 +120,6 @@ def _robustness_text(z: ZoneModel) -> str:
     if reachable is None:
         return "Ms over reachable sets: not read yet"
     if not reachable:
-        if z.has("fuzzy") and p.value(z["fuzzy"]) is not None and not p.value(z["fuzzy"]):
-            return "Ms over reachable sets: the gain box is searched once the adapter is on."
         if bound is not None and bound <= 1.0:
             return "Ms over reachable sets not bounded: Ms bound off (fFuzzyMsMax <= 1); the configured " \
                    "ratio box is used."

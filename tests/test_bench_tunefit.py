@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from plc.bench_tunefit import RECORDS, fit_cost
+from plc.bench_tunefit import RECORDS, fit_cost, spread_cost
 
 
 def test_the_fit_bench_identifies_the_model_of_each_record():
@@ -11,3 +11,8 @@ def test_the_fit_bench_identifies_the_model_of_each_record():
     assert cost > 0.0 and model.startswith("order 1, Ks 0.592")
     cost, model = fit_cost(two_lags, quick=True)
     assert cost > 0.0 and model.startswith("two lags")
+
+
+def test_the_fit_bench_spreads_the_fit_over_cycles():
+    cycles, longest_ms = spread_cost(RECORDS[0])
+    assert cycles > 1 and longest_ms > 0.0

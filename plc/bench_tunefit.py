@@ -65,7 +65,7 @@ def program(r: Record, with_fit: bool, budget: int = 0) -> str:
             if with_fit else "")
     return (
         "PROGRAM P_Bench\n  VAR\n    aHist : T_TuneHistory;\n    bFilled : BOOL;\n    nK : INT;\n"
-        "    fT : REAL;\n    bOk : BOOL;\n    fKs : REAL;\n    fTu : REAL;\n    fTg : REAL;\n"
+        "    fT : REAL;\n    bOk : BOOL;\n    fKs : REAL;\n    fTu : REAL;\n"
         "    nOrder : INT;\n"
         "    fRatio : REAL;\n    fbFit : FB_TuneFitNLag;\n  END_VAR\n"
         "  IF NOT bFilled THEN\n"

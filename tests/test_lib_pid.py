@@ -207,6 +207,48 @@ def test_gain_change_off_the_limit_stays_bumpless(pid: ScanDriver) -> None:
     assert y1 - y0 == pytest.approx(3.0 * 0.1 / 50.0 * 5.0, rel=1e-4)  # only the new gain's I step
 
 
+def _scheduled(pid: ScanDriver, kp: float, scale: float) -> None:
+    pid.set("fbPid.fKpScale", scale)
+    pid.set("fbPid.fKp", kp * scale)
+
+
+def test_a_schedulers_factor_moves_p_and_a_new_base_is_absorbed(pid: ScanDriver) -> None:
+    """fKpScale: a change of the factor alone moves P by the change times e (the scheduler's own bound keeps
+    it small); a new base at the same call is absorbed whole, as any gain change without a scheduler."""
+    configure(pid, kp=2.0, tn=50.0, tv=0.0, td=0.0, ymin=0.0, ymax=100.0)
+    pid.set("fbPid.fKpScale", 1.0)
+    run(pid, 100.0, [100.0] * 3)
+    pid.set("fbPid.fI", 40.0)
+    y0 = run(pid, 100.0, [95.0])[-1]
+    _scheduled(pid, 2.0, 1.25)  # the factor alone: P moves by 2 * 0.25 * 5 = 2.5 %
+    y1 = run(pid, 100.0, [95.0])[-1]
+    assert y1 - y0 == pytest.approx(2.5 + 2.5 * 0.1 / 50.0 * 5.0, rel=1e-4)
+    _scheduled(pid, 3.0, 1.0)  # a new base (the tuner, an HMI) with the factor reset: bumpless
+    y2 = run(pid, 100.0, [95.0])[-1]
+    assert y2 - y1 == pytest.approx(3.0 * 0.1 / 50.0 * 5.0, rel=1e-4)
+    pid.set("fbPid.fKpScale", 1.0)
+
+
+def test_a_factor_that_follows_every_adc_count_leaves_no_drift(pid: ScanDriver) -> None:
+    """X flips between two ADC counts around W while the scheduler's factor depends on the flip's direction
+    (a fuzzy table reading the slope): in the velocity form every up-and-down pair would leave
+    (Kp(up) - Kp(down)) * count in the output; with the factor in P the output returns to where it was."""
+    configure(pid, kp=30.0, tn=0.0, tv=0.0, td=0.0, ymin=-100.0, ymax=100.0)
+    pid.set("fbPid.fKpScale", 1.0)
+    run(pid, 2.0, [2.0] * 3)
+    pid.set("fbPid.fI", -40.0)
+    count = 0.029
+    y_start = run(pid, 2.0, [2.0])[-1]
+    for _ in range(50):
+        _scheduled(pid, 30.0, 1.2)  # X one count down (e > 0): the table raises Kp
+        run(pid, 2.0, [2.0 - count])
+        _scheduled(pid, 30.0, 0.8)  # back up: the table lowers it
+        run(pid, 2.0, [2.0])
+    assert run(pid, 2.0, [2.0])[-1] == pytest.approx(y_start, abs=1e-3)
+    # absorbed, each pair would have moved the output by (1.2 - 0.8) * 30 * 0.029 = 0.35 %: 17 % in 50 pairs
+    pid.set("fbPid.fKpScale", 1.0)
+
+
 # setpoint weight b: the setpoint reaches P and I through F(s) = b + (1 - b)/(1 + Tn s), which in discrete
 # time moves the output exactly as Kp (b W - X) plus the integral of the whole error would
 

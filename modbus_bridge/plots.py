@@ -21,6 +21,25 @@ GAIN_AXES = (  # (roles, axis label)
 )
 GAIN_LABELS = {"kp": "Kp", "kp_eff": "Kp in use", "tn": "Tn", "tn_eff": "Tn in use",
                "tv": "Tv", "tv_eff": "Tv in use"}
+COOLING_ROLES = {"kp": "kp_cool", "tn": "tn_cool", "tv": "tv_cool"}
+
+
+def gain_lines(tr: ZoneTrace) -> list[list[tuple[str, str]]]:
+    """Per gain axis, the (role, label) pairs to draw. A zone whose output went below 0 % ran on its cooling
+    set there, which the fuzzy adapter rewrites as well: that set is drawn too, and the others are marked
+    as the heating set's, so a cooling zone's plot does not show only gains it did not use."""
+    cools = bool(tr.u) and min(tr.u) < 0.0
+    axes = []
+    for roles, _ in GAIN_AXES:
+        lines = []
+        for role in roles:
+            if role in tr.gains:
+                lines.append((role, GAIN_LABELS[role] + (", heating" if cools else "")))
+            cool = COOLING_ROLES.get(role)
+            if cools and cool in tr.gains:
+                lines.append((cool, f"{GAIN_LABELS[role]}, cooling"))
+        axes.append(lines)
+    return axes
 
 
 def _pyplot():
@@ -100,10 +119,9 @@ def write_plot(result: RunResult, path: Path) -> None:
         ax_u.plot(tr.t, tr.u, lw=0.8, color="tab:red")
         mark_events(ax_u, tr, labels=False, bands=False)
         ax_u.set_ylabel("output (%)")
-        for ax, (roles, label) in zip((ax_kp, ax_tn), GAIN_AXES, strict=True):
-            for role in roles:
-                if role in tr.gains:
-                    ax.plot(tr.t, tr.gains[role], lw=0.9, label=GAIN_LABELS[role])
+        for ax, (_, label), lines in zip((ax_kp, ax_tn), GAIN_AXES, gain_lines(tr), strict=True):
+            for role, line_label in lines:
+                ax.plot(tr.t, tr.gains[role], lw=0.9, label=line_label)
             ax.set_ylabel(label)
             if ax.lines:
                 ax.legend(fontsize=7, loc="upper right")

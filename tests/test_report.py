@@ -129,3 +129,18 @@ def test_report_shows_the_measured_noise_the_tuned_filter_and_the_fuzzy_bound(tm
     for key in ("identified_noise_pp_c", "identified_fit_rms_pct", "tuned_filter_s", "tuned_ms",
                 "fuzzy_ms_reachable", "fuzzy_gain_scale", "fuzzy_box_share"):
         assert f"| {key} |" in md  # the side-by-side table of every metric
+
+
+def test_a_cooling_zone_s_plot_draws_the_cooling_set_it_ran_on() -> None:
+    from modbus_bridge.loop import ZoneTrace
+    from modbus_bridge.plots import gain_lines
+
+    gains = {"kp": [10.0, 10.0], "kp_eff": [10.0, 10.0], "kp_cool": [34.6, 30.1], "tn": [150.0, 150.0],
+             "tn_cool": [465.0, 400.0]}
+    cooling = ZoneTrace("platform", 2, t=[0.0, 1.0], u=[-50.0, -40.0], gains=gains)
+    kp_axis, tn_axis = gain_lines(cooling)
+    assert ("kp_cool", "Kp, cooling") in kp_axis and ("kp", "Kp, heating") in kp_axis
+    assert ("tn_cool", "Tn, cooling") in tn_axis
+    heating = ZoneTrace("nozzle", 1, t=[0.0, 1.0], u=[50.0, 40.0], gains=gains)
+    kp_axis, _ = gain_lines(heating)
+    assert kp_axis == [("kp", "Kp"), ("kp_eff", "Kp in use")]

@@ -274,7 +274,8 @@ def _tune(stack: Stack, pg) -> tuple[dict, dict]:
     return before, after
 
 
-def test_tuning_reject_restores_and_accept_keeps(stack: Stack, pg) -> None:
+def _engineer_idle_at_200(stack: Stack, pg) -> None:
+    """Zone 1's faceplate, logged in as engineer: IDLE, setpoint 200 (where TUNE heads from rest)."""
     pg.goto(stack.url + "/zone/1")
     login(pg, stack, "engineer", ENGINEER_PASSWORD)
     pg.get_by_test_id("mode-IDLE").click()
@@ -282,6 +283,10 @@ def test_tuning_reject_restores_and_accept_keeps(stack: Stack, pg) -> None:
     pg.get_by_test_id("in-setpoint").fill("200")
     pg.get_by_test_id("set-setpoint").click()
     expect()(pg.get_by_text("accepted by the PLC").first).to_be_visible()
+
+
+def test_tuning_reject_restores_and_accept_keeps(stack: Stack, pg) -> None:
+    _engineer_idle_at_200(stack, pg)
     before, after = _tune(stack, pg)
     ident = pg.get_by_test_id("tune-ident")
     expect()(ident).not_to_contain_text(re.compile(r"K = 0 degC"))  # seed 003: K 0.59 degC/%
@@ -368,13 +373,7 @@ def _identified_model(stack: Stack, pg) -> bool:
     (logged in as engineer). True when it tuned."""
     if stack.read("fKsZone1")["fKsZone1"] > 0.0:
         return False
-    pg.goto(stack.url + "/zone/1")
-    login(pg, stack, "engineer", ENGINEER_PASSWORD)
-    pg.get_by_test_id("mode-IDLE").click()
-    expect()(pg.get_by_text("mode IDLE: accepted by the PLC")).to_be_visible(timeout=WRITE_TIMEOUT_MS)
-    pg.get_by_test_id("in-setpoint").fill("200")
-    pg.get_by_test_id("set-setpoint").click()
-    expect()(pg.get_by_text("accepted by the PLC").first).to_be_visible()
+    _engineer_idle_at_200(stack, pg)
     _tune(stack, pg)
     pg.get_by_test_id("tune-accept").click()
     expect()(pg.get_by_test_id("tune-decided")).to_contain_text("accepted")

@@ -105,12 +105,21 @@ def test_a_slower_block_is_not_read_as_a_slower_sensor(fn: ScanDriver) -> None:
     assert fitted == pytest.approx(1.0, rel=5e-3)
 
 
-def test_a_level_no_fast_lag_in_range_gives_keeps_the_model_s_fast_lag(fn: ScanDriver) -> None:
-    line = window_line(1.0, 1.0) | dict(fMean=0.001)
+@pytest.mark.parametrize("s", [0.7, 1.0, 1.3])
+def test_a_level_no_fast_lag_in_range_gives_reads_both_lags_scaled_alike(fn: ScanDriver, s: float) -> None:
+    """A plant whose lags are both s times the model's, its level past every fast lag at the slope's s (a
+    model whose dead time and fast lag are split unlike the plant's): the slope read with the fast lag
+    scaled alike, not the model's, which would put the fast lag's share of the rise on the slow lag."""
+    line = window_line(s, s) | dict(fMean=0.001)
+    with_model_fast = run(fn, fSlope=line["fSlope"], fT=line["fT"], fHalf=line["fHalf"]).get("fScale")
     got = run(fn, **line)
+    print(f"both lags x {s}: slope with the model's fast lag x {with_model_fast:.4f}, "
+          f"alike x {got.get('fSlow'):.4f}")
     assert got.get("bFit")
-    assert got.get("fFast") == 1.0
-    assert got.get("fSlow") == pytest.approx(1.0, rel=2e-3)
+    assert got.get("fSlow") == pytest.approx(s, rel=2e-3)
+    assert got.get("fFast") == got.get("fSlow")
+    if s != 1.0:
+        assert abs(with_model_fast - s) > 10 * abs(got.get("fSlow") - s)
 
 
 @pytest.mark.parametrize(("x", "half"), [(0.25, 0.06), (0.1, 0.05), (0.5, 0.2), (0.3, 0.0)])

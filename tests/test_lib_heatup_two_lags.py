@@ -91,6 +91,10 @@ def test_two_unequal_lags_land_on_their_model() -> None:
 
 
 MISMATCH_SHORTFALLS = {
+    "both x0.7": "at 0.2 degC of noise the line reads a faster rise's lags with a scatter of about a tenth "
+                 "(slow x0.76, fast x0.61 for a plant at x0.7 in this draw); the pulse planned on a slow lag "
+                 "read longer than the plant's carries it past W: 2.43 %, 1.31 x (noise draws 1-6: 3 of 6 "
+                 "past 2 %)",
     "gain x1.2": "the rise reads as a slow lag 29 % shorter, so the pulse ends early, and the model's "
                  "holding power then carries the stronger heater past W before its integral, acting once X "
                  "runs ahead of the path, has taken that power off: 2.54 %, 2.03 x",
@@ -100,7 +104,8 @@ MISMATCH_SHORTFALLS = {
 def _mismatch_cases():
     for label, kw in (("sensor x0.7", dict(sensor=0.7)), ("sensor x1.3", dict(sensor=1.3)),
                       ("block x0.7", dict(block=0.7)), ("block x1.3", dict(block=1.3)),
-                      ("gain x0.8", dict(gain=0.8)), ("gain x1.2", dict(gain=1.2))):
+                      ("gain x0.8", dict(gain=0.8)), ("gain x1.2", dict(gain=1.2)),
+                      ("both x0.7", dict(sensor=0.7, block=0.7)), ("both x1.3", dict(sensor=1.3, block=1.3))):
         why = MISMATCH_SHORTFALLS.get(label)
         marks = [pytest.mark.xfail(reason=f"known shortfall: {why}", strict=True)] if why else []
         yield pytest.param(kw, marks=marks, id=label.replace(" ", "_"))

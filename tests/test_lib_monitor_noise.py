@@ -55,8 +55,9 @@ class NoisyFopdt:
 
 def controller(noise_pp: float) -> ScanDriver:
     drv = ScanDriver(load_test_app(controller_program()))
-    for name, value in (("fKs", K), ("fTg", T), ("fTu", L), ("fKp", KP), ("fTn", TN), ("fTv", TV), ("fTd", TD),
-                        ("fWatchPeriod", 0.0), ("fRunawayPeriod", 0.0), ("fTuneNoisePp", noise_pp)):
+    for name, value in (("fKs", K), ("fTg", T), ("fTu", L), ("fKp", KP), ("fTn", TN), ("fTv", TV),
+                        ("fTd", TD), ("fWatchPeriod", 0.0), ("fRunawayPeriod", 0.0),
+                        ("fTuneNoisePp", noise_pp)):
         drv.set(f"sPar.{name}", value)
     drv.set("fbUut.fW1", W)
     return drv

@@ -14,6 +14,8 @@ import time
 
 import pytest
 
+from modbus_bridge.alarms import describe
+
 from .conftest import ENGINEER_PASSWORD, Stack, shot
 
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
@@ -435,6 +437,13 @@ def test_lost_plc_shows_the_banner_and_the_panel_recovers(stack: Stack, pg) -> N
         stack.sim_command("load 1 0")
 
 
+def _zone_report(stack: Stack) -> str:
+    """Zone 1's state, alarms and values, for a wait that timed out."""
+    got = stack.read("nStateZone1", "dwAlarmZone1", "nHeatUpStateZone1", "fPvZone1", "fSetpointZone1",
+                     "fYZone1", "fTuneNoisePpZone1")
+    return f"{got}, alarms {describe(int(got['dwAlarmZone1']))}"
+
+
 def test_the_faceplate_shows_the_heat_up_and_the_plant_it_saw(stack: Stack, pg) -> None:
     """Switched on at the faceplate, the model-based setpoint response runs on a setpoint change; the page
     then shows the plant its limit phase saw beside the identified model, as the PLC reports them."""
@@ -460,8 +469,12 @@ def test_the_faceplate_shows_the_heat_up_and_the_plant_it_saw(stack: Stack, pg) 
     expect()(pg.get_by_test_id("fp-state")).to_have_text("ACTIVE")
     # from rest at W (after TUNE the hot end is still on its way), so the response starts from a steady plant
     w = stack.read("fSetpointZone1")["fSetpointZone1"]
-    wait_for(lambda: abs(stack.read("fPvZone1")["fPvZone1"] - w) < 0.5
-             and stack.read("nHeatUpStateZone1")["nHeatUpStateZone1"] == 0, 90, "the hot end to rest at W")
+    try:
+        wait_for(lambda: abs(stack.read("fPvZone1")["fPvZone1"] - w) < 0.5
+                 and stack.read("nHeatUpStateZone1")["nHeatUpStateZone1"] == 0, 90,
+                 "the hot end to rest at W")
+    except AssertionError as exc:
+        raise AssertionError(f"{exc}; zone 1 now: {_zone_report(stack)}") from None
     seen_before = stack.read("fHeatUpTgSeenZone1")["fHeatUpTgSeenZone1"]
     pg.get_by_test_id("in-setpoint").fill(f"{w - 20.0:.0f}")
     pg.get_by_test_id("set-setpoint").click()

@@ -7,12 +7,14 @@ also sized from the noise TUNE measured: a long hold raises no alarm, and an ope
 
 from __future__ import annotations
 
-import math
+import random
+from collections import deque
 
 import numpy as np
 import pytest
 
 from tests.st_helpers import ScanDriver, controller_program, load_test_app
+from tests.test_lib_tuner import Fopdt
 
 MANUAL, ACTIVE = 4, 2
 OPEN_BIT, STUCK_BIT, DETACHED_BIT = 1 << 18, 1 << 20, 1 << 19
@@ -22,35 +24,21 @@ READING_S = 0.5  # a new, independently noisy reading this often (the harness's 
 K, T, L = 0.573, 130.3, 18.8  # degC/%, s, s
 KP, TN, TV, TD = 5.78, 66.0, 9.02, 9.02
 AMBIENT, W = 21.0, 45.0
-NOISE = 0.2  # degC, sigma
-NOISE_PP = 4.0 * NOISE  # what TUNE measures at rest
+NOISE_HALF = 0.35  # degC: uniform noise of +-0.35 is 0.2 degC standard deviation, the TCLab's
+NOISE_PP = 2.0 * NOISE_HALF  # what TUNE measures at rest
+U_HOLD = (W - AMBIENT) / K  # %
 HOLD_S = 1800.0
 OPEN_FOUND_S = 120.0  # the open heater's alarm within this (the PID ramps the output it judges against)
 LOSS_MIN = 20.0  # fMonitorLossMin, %: the least loss that counts as an open heater
 W_STD_SHARE = 1.0 / 3.0  # W's noise in a steady hold: its standard deviation at most this share of LOSS_MIN
 
 
-class NoisyFopdt:
-    """K e^(-Ls) / (1 + Ts), exact discretisation, starting at rest at X = W with the output that holds it."""
-
-    def __init__(self, seed: int) -> None:
-        self.u_hold = (W - AMBIENT) / K
-        self.x = W
-        self.delay = [self.u_hold] * round(L / TS)
-        self.rng = np.random.default_rng(seed)
-        self.reading = W
-        self.n = 0
-
-    def measure(self) -> float:
-        if self.n % round(READING_S / TS) == 0:
-            self.reading = self.x + float(self.rng.normal(0.0, NOISE))
-        self.n += 1
-        return self.reading
-
-    def step(self, u: float) -> None:
-        self.delay.append(u)
-        a = math.exp(-TS / T)
-        self.x = a * self.x + (1.0 - a) * (AMBIENT + K * self.delay.pop(0))
+def plant_at_rest(seed: int) -> Fopdt:
+    """The FOPDT at rest at X = W, its dead time filled with the output that holds it there."""
+    plant = Fopdt(k=K, t=T, l=L, x0=AMBIENT, noise=NOISE_HALF, dt=TS, rng=random.Random(seed))
+    plant.x = W
+    plant.line = deque([U_HOLD] * round(L / TS))
+    return plant
 
 
 def controller(noise_pp: float) -> ScanDriver:
@@ -67,15 +55,19 @@ def hold_then_open(seed: int, noise_pp: float = NOISE_PP) -> tuple[float | None,
     """MANUAL at the holding power, then ACTIVE for HOLD_S, then the heater open: (time of the first monitor
     alarm in the hold, s; time from the fault to the open-heater alarm, s; standard deviation of W over the
     hold while the model checks run, %)."""
-    drv, plant = controller(noise_pp), NoisyFopdt(seed)
-    drv.set("fbUut.fYManual", plant.u_hold)
+    drv, plant = controller(noise_pp), plant_at_rest(seed)
+    drv.set("fbUut.fYManual", U_HOLD)
+    every = round(READING_S / TS)
+    reading = W
     false_alarm, found, losses = None, None, []
     manual_s = L + 60.0
     steps = round((manual_s + HOLD_S + OPEN_FOUND_S) / TS)
     for n in range(steps):
         now = n * TS
         drv.set("nMode", MANUAL if now < manual_s else ACTIVE)
-        drv.set("fbUut.fX", plant.measure())
+        if n % every == 0:
+            reading = plant.measure()
+        drv.set("fbUut.fX", reading)
         drv.set("fbUut.nPvSequence", n + 1)
         drv.scan()
         alarm = drv.get("fbUut.dwAlarm")

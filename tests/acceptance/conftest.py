@@ -10,14 +10,18 @@ from __future__ import annotations
 import asyncio
 import os
 
+import numpy as np
 import pytest
 
+from modbus_bridge.alarms import describe
 from modbus_bridge.binding import resolve_zone
+from modbus_bridge.loop import RunResult
 from modbus_bridge.regmap import APP_DIR, RegisterMapError
 from modbus_bridge.runner import HarnessSetup, run_variants
 from modbus_bridge.scenario import Scenario
 
 PLC_ENV = "THERMOST_PLC"
+STATE_ERROR = 8
 SPEED_ENV = "THERMOST_PLC_SPEED"
 
 
@@ -59,3 +63,17 @@ def plc_speed() -> float:
     if speed <= 0:
         raise pytest.UsageError(f"{SPEED_ENV} must be > 0")
     return speed
+
+
+def alarm_word(alarms) -> int:
+    """Every alarm bit a trace ever showed."""
+    return int(np.bitwise_or.reduce(np.asarray(alarms, dtype=np.int64))) if len(alarms) else 0
+
+
+def assert_no_alarm(result: RunResult, label: str) -> None:
+    """No alarm bit and no ERROR state in any zone of the run."""
+    assert result.error is None, result.error
+    for zone in result.zones:
+        word = alarm_word(zone.alarm)
+        assert word == 0, f"{label} / {zone.name}: {describe(word)}"
+        assert STATE_ERROR not in zone.state, f"{label} / {zone.name}: state ERROR"

@@ -9,19 +9,17 @@ from __future__ import annotations
 import asyncio
 import os
 
-import numpy as np
 import pytest
 
 from modbus_bridge.alarms import describe
 from modbus_bridge.faults import run_mismatch
 
-from .conftest import PLC_ENV
+from .conftest import PLC_ENV, STATE_ERROR, alarm_word
 
 SLOW_ENV = "THERMOST_SLOW"
 PLANTS = ("seed003_hotend_fuzzy", "t1_rrf_hotend")
 SCALES = ((0.7, 0.7), (1.3, 1.3), (0.7, 1.3), (1.3, 0.7))
 QUICK = {("seed003_hotend_fuzzy", (0.7, 0.7)), ("t1_rrf_hotend", (1.3, 1.3))}
-ERROR_STATE = 8
 BAND_BITS = 0xF00  # tolerance-band warnings (FB_CtrlAlarms bits 8-11)
 # goals not met yet (expected failures with THERMOST_SLOW=1): only the band warning is excused, a trip fails
 SHORTFALLS = {
@@ -54,10 +52,10 @@ def test_model_mismatch_raises_no_alarm(harness, plant, scale):
     run = asyncio.run(run_mismatch(plant, scale[0], scale[1], harness, plc=os.environ.get(PLC_ENV)))
     assert run.tuned, f"{plant}: the zone did not tune"
     assert run.t and run.t[-1] >= run.t_fault + 700.0, f"{plant}: the programme did not run to its end"
-    word = int(np.bitwise_or.reduce(np.asarray(run.alarm, dtype=np.int64)))
+    word = alarm_word(run.alarm)
     first = run.detection_s()
     where = f"{plant} T x{scale[0]} L x{scale[1]}: {describe(word)}, first {first} s after the change"
-    assert ERROR_STATE not in run.state, f"{where}; state ERROR"
+    assert STATE_ERROR not in run.state, f"{where}; state ERROR"
     assert word & ~BAND_BITS == 0, where
     if word:
         raise BandWarning(where)

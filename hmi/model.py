@@ -42,6 +42,9 @@ PANEL_ROLES: dict[str, str] = {
     "tv_cool": "fTvCoolZone{n}",
     "weight": "fSetpointWeightZone{n}",
     "weight_cool": "fSetpointWeightCoolZone{n}",
+    "fz_kp": "fFuzzyKpZone{n}",
+    "fz_tn": "fFuzzyTnZone{n}",
+    "fz_tv": "fFuzzyTvZone{n}",
     "kp_base": "fFuzzyKpBaseZone{n}",
     "tn_base": "fFuzzyTnBaseZone{n}",
     "tv_base": "fFuzzyTvBaseZone{n}",
@@ -188,7 +191,8 @@ class PanelModel:
         """Read every poll cycle: what the overview, faceplate, trend and alarm pages show live."""
         roles = ("pv", "setpoint", "setpoint2", "w_work", "y", "mode", "state", "tune_state", "alarm",
                  "error", "kp_eff", "tn_eff", "tv_eff", "td_eff", "manual", "sel_setpoint", "ramp", "fuzzy",
-                 "fz_e", "fz_ec", "fz_eq", "fz_ecq", "fz_dkp", "fz_dki", "fz_dkd", "kp", "tn", "tv", "td")
+                 "fz_e", "fz_ec", "fz_eq", "fz_ecq", "fz_dkp", "fz_dki", "fz_dkd", "fz_kp", "fz_tn", "fz_tv",
+                 "kp", "tn", "tv", "td")
         names = [z[r] for z in self.zones for r in roles if z.has(r)]
         names += [n for z in self.zones for pair in z.rules for n in pair]
         return list(dict.fromkeys(names))

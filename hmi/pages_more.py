@@ -29,9 +29,9 @@ def fuzzy_page(zone: int = 1) -> None:
             labels = {}
             for role, text in (("fuzzy", "adapter on"), ("fz_e", "e = W - X"), ("fz_ec", "ec"),
                                ("fz_eq", "E (quantised)"), ("fz_ecq", "EC (quantised)"), ("fz_dkp", "ΔKp"),
-                               ("fz_dki", "ΔKi"), ("fz_dkd", "ΔKd"), ("kp_eff", "Kp effective"),
-                               ("kp_base", "Kp base"), ("tn_eff", "Tn effective"), ("tn_base", "Tn base"),
-                               ("tv_eff", "Tv effective"), ("tv_base", "Tv base")):
+                               ("fz_dki", "ΔKi"), ("fz_dkd", "ΔKd"), ("fz_kp", "Kp effective"),
+                               ("kp_base", "Kp base"), ("fz_tn", "Tn effective"), ("tn_base", "Tn base"),
+                               ("fz_tv", "Tv effective"), ("tv_base", "Tv base")):
                 if z.has(role):
                     with ui.row().classes("items-baseline"):
                         ui.label(text).classes("w-32 text-grey-8")
@@ -99,7 +99,7 @@ def fuzzy_page(zone: int = 1) -> None:
                 f"ΔKi {value_text(z['fz_dki']) if z.has('fz_dki') else '-'}, "
                 f"ΔKd {value_text(z['fz_dkd']) if z.has('fz_dkd') else '-'}: "
                 f"Kp {value_text(z['kp_base']) if z.has('kp_base') else '-'} → "
-                f"{value_text(z['kp_eff']) if z.has('kp_eff') else '-'}.")
+                f"{value_text(z['fz_kp']) if z.has('fz_kp') else '-'}.")
         else:
             explain.set_text("No rule fires (adapter off or not running): the base gains are in use.")
         robust.set_text(_robustness_text(z))

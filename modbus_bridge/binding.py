@@ -75,9 +75,11 @@ ROLE_PATTERNS: dict[str, tuple[str, ...]] = {
     "heatup_state": (r"nHeatUpStateZone{n}",),
     "heatup_tu": (r"fHeatUpTuSeenZone{n}",),
     "heatup_tg": (r"fHeatUpTgSeenZone{n}",),
-    "kp_eff": (r"fFuzzyKpZone{n}", r"fKpEffZone{n}", r"fKpEffectiveZone{n}"),
-    "tn_eff": (r"fFuzzyTnZone{n}", r"fTnEffZone{n}", r"fTnEffectiveZone{n}"),
-    "tv_eff": (r"fFuzzyTvZone{n}", r"fTvEffZone{n}", r"fTvEffectiveZone{n}"),
+    # the set the PID ran on (the cooling set while the output is below 0); maps without those registers:
+    # the fuzzy adapter's heating set
+    "kp_eff": (r"fKpInUseZone{n}", r"fFuzzyKpZone{n}", r"fKpEffZone{n}", r"fKpEffectiveZone{n}"),
+    "tn_eff": (r"fTnInUseZone{n}", r"fFuzzyTnZone{n}", r"fTnEffZone{n}", r"fTnEffectiveZone{n}"),
+    "tv_eff": (r"fTvInUseZone{n}", r"fFuzzyTvZone{n}", r"fTvEffZone{n}", r"fTvEffectiveZone{n}"),
 }
 # the application's commissioning key (nUnlockKeyValue in plc/app/gen_application.py; a test compares them)
 UNLOCK_KEY = 0x5AFE

@@ -27,7 +27,7 @@ from .scenario import Phase, Scenario, Variant, Zone
 from .sensors import Sensor
 
 PERCENT = 100.0
-# the effective gains the controller runs with (the fuzzy adapter's), traced through the run
+# the gains the PID runs with (the set in use, as the fuzzy adapter left it), traced through the run
 EFFECTIVE_GAIN_ROLES = ("kp_eff", "tn_eff", "tv_eff")
 # traced through the run: the effective gains and the tuned set and identified plant (kept_values.TUNED)
 GAIN_ROLES = (*EFFECTIVE_GAIN_ROLES, *kept_values.roles(kept_values.TUNED, traced=True))

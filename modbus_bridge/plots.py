@@ -26,15 +26,16 @@ COOLING_ROLES = {"kp": "kp_cool", "tn": "tn_cool", "tv": "tv_cool"}
 
 def gain_lines(tr: ZoneTrace) -> list[list[tuple[str, str]]]:
     """Per gain axis, the (role, label) pairs to draw. A zone whose output went below 0 % ran on its cooling
-    set there, which the fuzzy adapter rewrites as well: that set is drawn too, and the others are marked
-    as the heating set's, so a cooling zone's plot does not show only gains it did not use."""
+    set there, which the fuzzy adapter rewrites as well: that set is drawn too and the tuned ones are marked
+    heating or cooling; the set in use is whichever of them the PID ran on at the time."""
     cools = bool(tr.u) and min(tr.u) < 0.0
     axes = []
     for roles, _ in GAIN_AXES:
         lines = []
         for role in roles:
             if role in tr.gains:
-                lines.append((role, GAIN_LABELS[role] + (", heating" if cools else "")))
+                side = ", heating" if cools and role in COOLING_ROLES else ""
+                lines.append((role, GAIN_LABELS[role] + side))
             cool = COOLING_ROLES.get(role)
             if cools and cool in tr.gains:
                 lines.append((cool, f"{GAIN_LABELS[role]}, cooling"))

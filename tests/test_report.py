@@ -141,6 +141,7 @@ def test_a_cooling_zone_s_plot_draws_the_cooling_set_it_ran_on() -> None:
     kp_axis, tn_axis = gain_lines(cooling)
     assert ("kp_cool", "Kp, cooling") in kp_axis and ("kp", "Kp, heating") in kp_axis
     assert ("tn_cool", "Tn, cooling") in tn_axis
+    assert ("kp_eff", "Kp in use") in kp_axis  # the set the PID ran on, whichever side that was
     heating = ZoneTrace("nozzle", 1, t=[0.0, 1.0], u=[50.0, 40.0], gains=gains)
     kp_axis, _ = gain_lines(heating)
     assert kp_axis == [("kp", "Kp"), ("kp_eff", "Kp in use")]

@@ -142,20 +142,22 @@ def test_poller_reads_writes_and_audits_against_the_soft_plc(tmp_path) -> None:
 
             poller.listeners |= {lambda: pushed.append(poller.seq), broken}
             poller.start()
-            await polled_until(lambda: len(poller.samples) >= 5 and poller.diag.scan_count)
-            assert poller.diag.connected and not poller.stale
-            assert len(pushed) >= 5 and broken not in poller.listeners  # a failing page is dropped
-            assert poller.diag.requests_per_cycle <= 8
-            ok = await poller.write({"fSetpointZone1": 55.0}, "operator")
-            assert ok.ok, ok.message
-            refused = await poller.write({"fYMinZone1": 100.0}, "engineer")  # fYMin must stay < fYMax
-            assert not refused.ok and "refused by the PLC" in refused.message
-            bad = await poller.write({"nModeZone1": 1e9}, "operator")
-            assert not bad.ok and "not written" in bad.message
-            busy = await asyncio.gather(poller.write({"fSetpointZone1": 60.0}, "operator"),
-                                        poller.write({"fSetpointZone1": 61.0}, "operator"))
-            assert sorted(r.ok for r in busy) == [False, True]  # a double click writes once
-            await poller.stop()
+            try:  # a failed check stops the poller too, or its task outlives the PLC
+                await polled_until(lambda: len(poller.samples) >= 5 and poller.diag.scan_count)
+                assert poller.diag.connected and not poller.stale
+                assert len(pushed) >= 5 and broken not in poller.listeners  # a failing page is dropped
+                assert poller.diag.requests_per_cycle <= 8
+                ok = await poller.write({"fSetpointZone1": 55.0}, "operator")
+                assert ok.ok, ok.message
+                refused = await poller.write({"fYMinZone1": 100.0}, "engineer")  # fYMin must stay < fYMax
+                assert not refused.ok and "refused by the PLC" in refused.message
+                bad = await poller.write({"nModeZone1": 1e9}, "operator")
+                assert not bad.ok and "not written" in bad.message
+                busy = await asyncio.gather(poller.write({"fSetpointZone1": 60.0}, "operator"),
+                                            poller.write({"fSetpointZone1": 61.0}, "operator"))
+                assert sorted(r.ok for r in busy) == [False, True]  # a double click writes once
+            finally:
+                await poller.stop()
         results = [row[5] for row in store.audit()]
         assert results.count("accepted") == 2 and "refused" in results and "failed" in results
         store.close()

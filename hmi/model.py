@@ -48,7 +48,7 @@ PANEL_ROLES: dict[str, str] = {
     "kp_base": "fFuzzyKpBaseZone{n}",
     "tn_base": "fFuzzyTnBaseZone{n}",
     "tv_base": "fFuzzyTvBaseZone{n}",
-    "td_eff": "fFuzzyTdZone{n}",
+    "td_eff": "fTdInUseZone{n}",  # beside kp_eff .. tv_eff: the set the PID ran on
     "fz_e": "fFuzzyEZone{n}",
     "fz_ec": "fFuzzyEcZone{n}",
     "fz_eq": "fFuzzyEqZone{n}",

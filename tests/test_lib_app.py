@@ -178,10 +178,11 @@ def test_platform_zone_cools_with_negative_output(plc: ScanDriver) -> None:
 
 
 def test_the_set_in_use_is_published_for_the_side_the_output_is_on(plc: ScanDriver) -> None:
-    """fKpInUse/fTnInUse/fTvInUse show the cooling set while the output is below 0 % and the heating set
-    otherwise, so a cooling zone's trace shows the gains it ran on."""
-    for name, value in (("fKpZone2", 3.0), ("fTnZone2", 100.0), ("fTvZone2", 10.0),
-                        ("fKpCoolZone2", 7.0), ("fTnCoolZone2", 300.0), ("fTvCoolZone2", 0.0)):
+    """fKpInUse/fTnInUse/fTvInUse/fTdInUse show the cooling set while the output is below 0 % and the heating
+    set otherwise, so a cooling zone's trace shows the gains it ran on."""
+    for name, value in (("fKpZone2", 3.0), ("fTnZone2", 100.0), ("fTvZone2", 10.0), ("fTdZone2", 2.5),
+                        ("fKpCoolZone2", 7.0), ("fTnCoolZone2", 300.0), ("fTvCoolZone2", 0.0),
+                        ("fTdCoolZone2", 0.0)):
         plc.set(name, value)
     plc.set("fSetpointZone2", 20.0)
     plc.set("nModeZone2", ACTIVE)
@@ -191,7 +192,7 @@ def test_the_set_in_use_is_published_for_the_side_the_output_is_on(plc: ScanDriv
             plc.set("nPvSeqZone2", plc.get("nPvSeqZone2") + 1)
             plc.scan()
         assert (plc.get("fYZone2") < 0.0) is (side == "Cool")
-        for gain in ("Kp", "Tn", "Tv"):
+        for gain in ("Kp", "Tn", "Tv", "Td"):
             assert plc.get(f"f{gain}InUseZone2") == plc.get(f"f{gain}{side}Zone2")
         assert plc.get("fKpInUseZone2") == (7.0 if side else 3.0)
 

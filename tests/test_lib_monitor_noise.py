@@ -13,12 +13,15 @@ from collections import deque
 import numpy as np
 import pytest
 
+from modbus_bridge.alarms import alarm_bits
+from modbus_bridge.binding import ControllerCodes
 from tests.st_helpers import ScanDriver, controller_program, load_test_app
 from tests.test_lib_tuner import Fopdt
 
-MANUAL, ACTIVE = 4, 2
-OPEN_BIT, STUCK_BIT, DETACHED_BIT = 1 << 18, 1 << 20, 1 << 19
-MONITOR_BITS = OPEN_BIT | STUCK_BIT | DETACHED_BIT
+MODES = ControllerCodes.load().modes
+MANUAL, ACTIVE = MODES["MANUAL"], MODES["ACTIVE"]
+OPEN_BIT = alarm_bits()["heater_open"].mask
+MONITOR_BITS = OPEN_BIT | alarm_bits()["stuck_on"].mask | alarm_bits()["sensor_detached"].mask
 TS = 0.1  # task cycle, s
 READING_S = 0.5  # a new, independently noisy reading this often (the harness's plant step)
 K, T, L = 0.573, 130.3, 18.8  # degC/%, s, s
@@ -29,8 +32,7 @@ NOISE_PP = 2.0 * NOISE_HALF  # what TUNE measures at rest
 U_HOLD = (W - AMBIENT) / K  # %
 HOLD_S = 1800.0
 OPEN_FOUND_S = 120.0  # the open heater's alarm within this (the PID ramps the output it judges against)
-LOSS_MIN = 20.0  # fMonitorLossMin, %: the least loss that counts as an open heater
-W_STD_SHARE = 1.0 / 3.0  # W's noise in a steady hold: its standard deviation at most this share of LOSS_MIN
+W_STD_SHARE = 1.0 / 3.0  # W's noise in a hold: its standard deviation at most this share of fMonitorLossMin
 
 
 def plant_at_rest(seed: int) -> Fopdt:
@@ -51,10 +53,10 @@ def controller(noise_pp: float) -> ScanDriver:
     return drv
 
 
-def hold_then_open(seed: int, noise_pp: float = NOISE_PP) -> tuple[float | None, float | None, float]:
+def hold_then_open(seed: int, noise_pp: float = NOISE_PP) -> tuple[float | None, float | None, float, float]:
     """MANUAL at the holding power, then ACTIVE for HOLD_S, then the heater open: (time of the first monitor
     alarm in the hold, s; time from the fault to the open-heater alarm, s; standard deviation of W over the
-    hold while the model checks run, %)."""
+    hold while the model checks run, %; the least loss that counts as an open heater, fMonitorLossMin, %)."""
     drv, plant = controller(noise_pp), plant_at_rest(seed)
     drv.set("fbUut.fYManual", U_HOLD)
     every = round(READING_S / TS)
@@ -79,14 +81,14 @@ def hold_then_open(seed: int, noise_pp: float = NOISE_PP) -> tuple[float | None,
         if opened and found is None and alarm & OPEN_BIT:
             found = now - manual_s - HOLD_S
         plant.step(0.0 if opened else drv.get("fbUut.fY"))
-    return false_alarm, found, float(np.std(losses))
+    return false_alarm, found, float(np.std(losses)), drv.get("sPar.fMonitorLossMin")
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_a_noisy_hold_raises_no_alarm_and_an_open_heater_is_found(seed: int) -> None:
-    false_alarm, found, w_std = hold_then_open(seed)
+    false_alarm, found, w_std, loss_min = hold_then_open(seed)
     print(f"noise draw {seed}: W std {w_std:.1f} % in the {HOLD_S:.0f} s hold, first monitor alarm there: "
           f"{false_alarm}; open heater found after {found} s")
-    assert w_std <= W_STD_SHARE * LOSS_MIN, f"the noise moves the loss estimate by {w_std:.1f} % (std)"
+    assert w_std <= W_STD_SHARE * loss_min, f"the noise moves the loss estimate by {w_std:.1f} % (std)"
     assert false_alarm is None, f"alarm on a healthy heater {false_alarm:.1f} s into the hold"
     assert found is not None and found <= OPEN_FOUND_S

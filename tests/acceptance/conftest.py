@@ -14,14 +14,14 @@ import numpy as np
 import pytest
 
 from modbus_bridge.alarms import describe
-from modbus_bridge.binding import resolve_zone
+from modbus_bridge.binding import ControllerCodes, resolve_zone
 from modbus_bridge.loop import RunResult
 from modbus_bridge.regmap import APP_DIR, RegisterMapError
 from modbus_bridge.runner import HarnessSetup, run_variants
 from modbus_bridge.scenario import Scenario
 
 PLC_ENV = "THERMOST_PLC"
-STATE_ERROR = 8
+STATE_ERROR = ControllerCodes.load().states["ERROR"]
 SPEED_ENV = "THERMOST_PLC_SPEED"
 
 

@@ -322,6 +322,8 @@ def _noise_and_filter(z: ZoneModel) -> str:
     if not (z.has("noise_pp") and p.value(z["noise_pp"])):
         return ""
     text = f"; sensor noise {value_text(z['noise_pp'])} peak-to-peak at rest"
+    if z.has("noise_interval") and p.value(z["noise_interval"]):
+        text += f", a new reading every {value_text(z['noise_interval'])}"
     if z.has("t_filter"):
         text += f", filter sized {value_text(z['t_filter'])}"
     if z.has("t_filter_used"):

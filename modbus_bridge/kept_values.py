@@ -33,6 +33,7 @@ TUNED: tuple[KeptValue, ...] = (
     KeptValue("tn_cool", "tuned_tn_cool_s", traced=True),
     KeptValue("tv_cool", "tuned_tv_cool_s", traced=True),
     KeptValue("noise_pp", "identified_noise_pp_c", "noise p-p (°C)"),  # sensor noise TUNE measured at rest
+    KeptValue("noise_interval", "identified_noise_interval_s", "noise held (s)"),  # the PV's update interval
     KeptValue("t_filter", "tuned_filter_s", "filter (s)"),  # the actual-value filter sized from it
     KeptValue("ms", "tuned_ms", "Ms"),  # of the tuned set on the identified model
     KeptValue("order", "identified_order", "model order"),  # 1 FOPDT, n >= 2 the n-lag fitted

@@ -582,6 +582,7 @@ def test_tune_sizes_the_actual_value_filter_from_the_measured_noise(uut, noise, 
     got = identified(uut)
     noise_pp = uut.get("fbUut.fbTuner.fNoise")
     tf = uut.get("sPar.fTFilterTuned")
+    assert uut.get("fbUut.fTuneNoiseInterval") == pytest.approx(TS, rel=1e-6)  # a new reading every cycle
     want = filter_time(got["fKp"], noise_pp, 2.0, TS, got["fTu"], share)
     assert tf == pytest.approx(want, rel=1e-3, abs=1e-6)
     if noise > 0.1:
@@ -596,6 +597,34 @@ def test_tune_sizes_the_actual_value_filter_from_the_measured_noise(uut, noise, 
     loop = (pid_frequency_response(got["fKp"], got["fTn"], got["fTv"], got["fTd"], w)
             * got["fKs"] * np.exp(-1j * w * got["fTu"]) / (1j * w * got["fTg"] + 1.0) / (1j * w * tf + 1.0))
     assert got["fMsTuned"] == pytest.approx(max_sensitivity(loop), rel=0.02)
+
+
+@dataclass
+class HeldSensor:
+    """A plant read through a sensor that updates every `every` control cycles (an input card, a PV
+    written over Modbus at the plant's pace): each noisy reading is held that long."""
+
+    plant: Fopdt
+    every: int
+    calls: int = 0
+    value: float = 0.0
+
+    def measure(self) -> float:
+        if self.calls % self.every == 0:
+            self.value = self.plant.measure()
+        self.calls += 1
+        return self.value
+
+    def step(self, u: float) -> None:
+        self.plant.step(u)
+
+
+@pytest.mark.parametrize("every", [2, 5, 10])
+def test_tune_publishes_how_long_the_sensor_holds_each_reading(uut, every: int) -> None:
+    """The noise's update interval TUNE measures at rest: the cycles per change of X, times the cycle."""
+    run_tune(uut, HeldSensor(Fopdt(k=0.9, t=100.0, l=10.0, noise=0.5, rng=random.Random(3)), every), w=80.0)
+    assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
+    assert uut.get("fbUut.fTuneNoiseInterval") == pytest.approx(every * TS, rel=0.02)
 
 
 def test_the_users_filter_wins_and_tune_then_sizes_none(uut) -> None:

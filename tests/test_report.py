@@ -103,6 +103,8 @@ def test_report_shows_the_measured_noise_the_tuned_filter_and_the_fuzzy_bound(tm
     by_name = {r.variant.name: {pm.phase: pm for pm in pms} for r, pms in runs}
     tune = by_name["fuzzy PID"]["tune"].values
     assert 0.0 < tune["identified_noise_pp_c"] < 1.0  # 12-bit NTC at 200 degC: about one count, 0.12 degC
+    # a new reading every control cycle (0.1 s) at most, held longer where the NTC's count repeats
+    assert tune["identified_noise_interval_s"] >= 0.1 * (1 - 1e-3)
     assert tune["tuned_filter_s"] >= 0.0 and tune["tuned_ms"] > 1.0
     assert 0.0 < tune["identified_fit_rms_pct"] < 5.0  # a first-order plant: its model follows the record
     for phase in ("step", "load"):  # the adapter runs; its bound holds at the cost of scale and box
@@ -121,13 +123,15 @@ def test_report_shows_the_measured_noise_the_tuned_filter_and_the_fuzzy_bound(tm
     tuned_header = next(line for line in md.splitlines() if line.startswith("| variant | zone | phase | Ks"))
     assert "noise p-p (°C)" in tuned_header and "filter (s)" in tuned_header and "| Ms |" in tuned_header
     assert "fit rms (% of rise)" in tuned_header
-    assert f"| {tune['identified_noise_pp_c']:.4g} | {tune['tuned_filter_s']:.4g} |" in md
+    assert "noise held (s)" in tuned_header
+    assert (f"| {tune['identified_noise_pp_c']:.4g} | {tune['identified_noise_interval_s']:.4g} | "
+            f"{tune['tuned_filter_s']:.4g} |") in md
     section = md[md.index("## Fuzzy adapter: Ms over the gain sets it can reach"):md.index("## All metrics")]
     assert (f"| fuzzy PID | nozzle | step | {step['fuzzy_ms_reachable']:.4g} | {step['fuzzy_ms_max']:.3g} | "
             f"{step['fuzzy_gain_scale']:.3g} | {100 * step['fuzzy_box_share']:.0f} % |") in section
     assert "PID (self-tuned)" not in section
-    for key in ("identified_noise_pp_c", "identified_fit_rms_pct", "tuned_filter_s", "tuned_ms",
-                "fuzzy_ms_reachable", "fuzzy_gain_scale", "fuzzy_box_share"):
+    for key in ("identified_noise_pp_c", "identified_noise_interval_s", "identified_fit_rms_pct",
+                "tuned_filter_s", "tuned_ms", "fuzzy_ms_reachable", "fuzzy_gain_scale", "fuzzy_box_share"):
         assert f"| {key} |" in md  # the side-by-side table of every metric
 
 

@@ -298,10 +298,12 @@ def test_tuning_reject_restores_and_accept_keeps(stack: Stack, pg) -> None:
     assert stack.read("nTuneOrderZone1")["nTuneOrderZone1"] == 1
     expect()(ident).to_contain_text("; model: first order; fit rms")
     # what TUNE measured at rest and the filter it sized from it, as the PLC reports them
-    got = stack.read("fTuneNoisePpZone1", "fTFilterTunedZone1", "fTFilterUsedZone1")
-    assert got["fTuneNoisePpZone1"] > 0.0
+    got = stack.read("fTuneNoisePpZone1", "fTuneNoiseIntervalZone1", "fTFilterTunedZone1",
+                     "fTFilterUsedZone1")
+    assert got["fTuneNoisePpZone1"] > 0.0 and got["fTuneNoiseIntervalZone1"] > 0.0
     expect()(ident).to_contain_text(
-        f"; sensor noise {shown('fTuneNoisePpZone1', got['fTuneNoisePpZone1'])} peak-to-peak at rest, filter "
+        f"; sensor noise {shown('fTuneNoisePpZone1', got['fTuneNoisePpZone1'])} peak-to-peak at rest, a new "
+        f"reading every {shown('fTuneNoiseIntervalZone1', got['fTuneNoiseIntervalZone1'])}, filter "
         f"sized {shown('fTFilterTunedZone1', got['fTFilterTunedZone1'])}, in use "
         f"{shown('fTFilterUsedZone1', got['fTFilterUsedZone1'])}")
     shot(pg, "tuning", docs=True)

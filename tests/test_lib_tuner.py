@@ -562,13 +562,14 @@ def test_a_settled_response_publishes_how_well_its_two_point_model_fits() -> Non
     assert rms["two lags"] > 2.0 * rms["FOPDT"]
 
 
-def filter_time(kp: float, noise_pp: float, goal_pp: float, cycle: float, tu: float, share: float) -> float:
-    """docs/library.md: the actual-value filter TUNE sizes so Kp * filtered noise meets the output goal."""
+def filter_time(kp: float, noise_pp: float, goal_pp: float, hold: float, tu: float, share: float) -> float:
+    """docs/library.md: the actual-value filter TUNE sizes so Kp * filtered noise meets the output goal, for
+    noise that holds each value `hold` s (the PV's update interval)."""
     if kp * noise_pp <= goal_pp:
         return 0.0
     r = goal_pp / (kp * noise_pp)
     a = 2 * r * r / (1 + r * r)
-    return min(cycle * (1 - a) / a, share * tu)
+    return min(hold * (1 - a) / a, share * tu)
 
 
 @pytest.mark.parametrize(("noise", "share"), [(0.5, 0.1), (0.5, 0.02), (0.05, 0.1)],
@@ -576,8 +577,9 @@ def filter_time(kp: float, noise_pp: float, goal_pp: float, cycle: float, tu: fl
 def test_tune_sizes_the_actual_value_filter_from_the_measured_noise(uut, noise, share) -> None:
     plant = Fopdt(k=0.9, t=100.0, l=10.0, noise=noise, rng=random.Random(3))
     # the filter is sized for the rule's Kp; fTuneMsMax off keeps that Kp in the set (the detuning after it
-    # is the auto-rule test's)
-    run_tune(uut, plant, w=80.0, extra={"fTuneFilterLagShare": share, "fTuneMsMax": 0.0})
+    # is the auto-rule test's), and so does the noise limit off (its own bound is the noise-limited test's)
+    run_tune(uut, plant, w=80.0, extra={"fTuneFilterLagShare": share, "fTuneMsMax": 0.0,
+                                        "fTuneNoiseKpOutput": 0.0})
     assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
     got = identified(uut)
     noise_pp = uut.get("fbUut.fbTuner.fNoise")
@@ -625,6 +627,40 @@ def test_tune_publishes_how_long_the_sensor_holds_each_reading(uut, every: int) 
     run_tune(uut, HeldSensor(Fopdt(k=0.9, t=100.0, l=10.0, noise=0.5, rng=random.Random(3)), every), w=80.0)
     assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
     assert uut.get("fbUut.fTuneNoiseInterval") == pytest.approx(every * TS, rel=0.02)
+
+
+HOLD_CYCLES = 5  # the TCLab scenario's: a reading every 0.5 s, the controller every 0.1 s
+
+
+def test_the_filter_is_sized_for_noise_the_sensor_holds_for_several_cycles(uut) -> None:
+    """TUNE sizes the filter on the interval the noise holds each value: through the running filter the
+    held noise keeps the share of its standard deviation the sizing planned (sized on the cycle, as if
+    every reading were new, it kept about twice that)."""
+    plant = Fopdt(k=0.9, t=100.0, l=10.0, noise=0.5, rng=random.Random(3))
+    sensor = HeldSensor(plant, HOLD_CYCLES)
+    run_tune(uut, sensor, w=80.0, extra={"fTuneMsMax": 0.0, "fTuneNoiseKpOutput": 0.0})
+    assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
+    hold = uut.get("fbUut.fTuneNoiseInterval")
+    got = identified(uut)
+    tf = uut.get("sPar.fTFilterTuned")
+    assert tf == pytest.approx(filter_time(got["fKp"], uut.get("sPar.fTuneNoisePp"), 2.0, hold, got["fTu"],
+                                           0.1), rel=1e-3)
+    assert tf > HOLD_CYCLES * TS
+    uut.set("nMode", MODE_ACTIVE)
+    errors, raw = [], []
+    for k in range(int(600.0 / TS)):
+        x = sensor.measure()
+        uut.set("fbUut.fX", x)
+        uut.scan()
+        if k * TS > 20 * tf:
+            errors.append(uut.get("fbUut.fXUsed") - plant.x)
+            raw.append(x - plant.x)
+        sensor.step(uut.get("fbUut.fY"))
+    a = hold / (tf + hold)
+    planned = math.sqrt(a / (2 - a))
+    kept = float(np.std(errors) / np.std(raw))
+    print(f"noise held {hold:.2f} s, filter {tf:.2f} s: std kept {kept:.3f}, planned {planned:.3f}")
+    assert kept == pytest.approx(planned, rel=0.15)
 
 
 def test_the_users_filter_wins_and_tune_then_sizes_none(uut) -> None:
@@ -723,28 +759,36 @@ def test_below_lag_dominated_auto_takes_amigo_where_it_rejects_loads_better_and_
     assert uut.get("nRuleUsed") == expected_rule
 
 
-@pytest.mark.parametrize("kp_limit", [2.5, 0.0], ids=["noise-limited", "limit-off"])
+@pytest.mark.parametrize("kp_limit", [1.0, 2.5, 0.0], ids=["noise-limited", "filter-suffices", "limit-off"])
 def test_a_noise_limited_set_is_simc_pi_whatever_rule_auto_picked(uut, kp_limit) -> None:
     """AUTO picks AMIGO here (fTauLagDominated 0); with the noise limit the Kp it can afford is far below
     AMIGO's, and the set written is SIMC PI for that slower loop: Kp = fTuneNoiseKpOutput / filtered noise,
-    tau_c = Tg / (Ks Kp) - Tu, Tn = min(Tg + Tu/3, 4 (tau_c + Tu)), no derivative."""
+    tau_c = Tg / (Ks Kp) - Tu, Tn = min(Tg + Tu/3, 4 (tau_c + Tu)), no derivative. At a limit the filter can
+    meet within its share of the loop's time scale Tg / (Ks Kp), AMIGO's set stays."""
     plant = Fopdt(k=0.9, t=100.0, l=10.0, noise=1.0, rng=random.Random(3))
     run_tune(uut, plant, w=80.0, extra={"fTauLagDominated": 0.0, "fTuneNoiseKpOutput": kp_limit})
     assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
     got = identified(uut)
-    if not kp_limit:
+    tf, share = uut.get("sPar.fTFilterTuned"), uut.get("sPar.fTuneFilterLagShare")
+    if kp_limit != 1.0:
         assert uut.get("nRuleUsed") == RULE_AMIGO
         assert got["fTv"] > 0.0
         assert got["fSetpointWeight"] == 0.0
+        if kp_limit:
+            a = TS / (tf + TS)
+            assert got["fKp"] * uut.get("fbUut.fbTuner.fNoise") * math.sqrt(a / (2.0 - a)) <= kp_limit * 1.001
+            assert share * got["fTu"] < tf <= share * got["fTg"] / (got["fKs"] * got["fKp"]) * 1.001
         return
     assert uut.get("nRuleUsed") == RULE_SIMC
     assert (got["fTv"], got["fTd"]) == (0.0, 0.0)
     assert got["fSetpointWeight"] == pytest.approx(setpoint_weight(RULE_SIMC, 0.0, got["fTn"], got["fTg"]),
                                                    rel=1e-5)
-    tf = uut.get("sPar.fTFilterTuned")
     a = TS / (tf + TS)
     noise_filtered = uut.get("fbUut.fbTuner.fNoise") * math.sqrt(a / (2.0 - a))
     assert got["fKp"] == pytest.approx(kp_limit / noise_filtered, rel=1e-3)
+    # the filter takes its share of the slower loop's time scale, tau_c + Tu = Tg / (Ks Kp), not of Tu alone
+    assert tf == pytest.approx(share * got["fTg"] / (got["fKs"] * got["fKp"]), rel=1e-3)
+    assert tf > share * got["fTu"]
     amigo_kp = rule_values(RULE_AMIGO, got["fKs"], got["fTu"], got["fTg"], got["fVmax"], 100.0)[0]
     assert got["fKp"] < amigo_kp
     assert got["fTn"] == pytest.approx(simc_tn(got["fKp"], got["fKs"], got["fTu"], got["fTg"]), rel=1e-3)
@@ -768,6 +812,9 @@ def test_a_noise_limited_set_without_a_model_is_simc_pi_on_the_tangent(uut) -> N
     noise_filtered = uut.get("fbUut.fbTuner.fNoise") * math.sqrt(a / (2.0 - a))
     assert got["fKp"] == pytest.approx(kp_limit / noise_filtered, rel=1e-3)
     k_prime = got["fVmax"] / dy
+    # the filter's share of the loop's time scale, tau_c + Tu = 1 / (k' Kp)
+    share = uut.get("sPar.fTuneFilterLagShare")
+    assert tf == pytest.approx(share / (k_prime * got["fKp"]), rel=1e-3)
     want_tn = SIMC_TN_FACTOR / (k_prime * got["fKp"])
     kp_chr = rule_values(RULE_CHR, 0.0, got["fTu"], 0.0, got["fVmax"], dy)[0]
     print(f"Kp {got['fKp']:.3f} %/degC (CHR's {kp_chr:.1f}), Tn {got['fTn']:.1f} s "

@@ -61,7 +61,7 @@ ROLE_PATTERNS: dict[str, tuple[str, ...]] = {
     "ms": (r"fMsTunedZone{n}",),
     # sensor noise peak-to-peak TUNE measured at rest (it sizes t_filter from it)
     "noise_pp": (r"fTuneNoisePpZone{n}",),
-    # how long that noise held each value (the PV's update interval)
+    # how long that noise held each value (the PV's update interval, on which t_filter is sized)
     "noise_interval": (r"fTuneNoiseIntervalZone{n}",),
     # order of the model TUNE identified: 1 FOPDT, n >= 2 n equal lags
     "order": (r"nTuneOrderZone{n}",),

@@ -17,7 +17,7 @@ from .heatup_step import ScoredStep, model_based_step
 SCENARIO = "t4_tclab"
 BOUND_RATIO, MISMATCH_OVERSHOOT_PCT, NOMINAL_OVERSHOOT_PCT = 1.05, 2.0, 0.5
 SHORTFALL = (
-    "0.74 % true overshoot: the identified gain is 1.7 % below the plant's at the step, so the plan switches "
+    "0.72 % true overshoot: the identified gain is 1.7 % below the plant's at the step, so the plan switches "
     "about 2.6 s later than one on the true plant would and holds 0.5 % of output too much, which the PID's "
     "integral starts taking off only once the path is inside the settling band"
 )

@@ -4,7 +4,10 @@ holds its own setpoint. TUNE fits two unequal lags to a plant of three coupled s
 plan starts from is not the plant the step meets; the rise's line re-plans on the lags it shows. Goals on
 the true temperature: 2 % settling within 1.05x the bang-hold bound of the true plant (one switch, which
 overshoots about 2 % to enter the band early), overshoot <= 2 % (the mismatch goal) and <= 0.5 % (the
-nominal goal, not met: the known shortfall below)."""
+nominal goal). The identified gain is below the plant's at the step, so the plan switches late and holds a
+little too much power; what keeps the peak within 0.5 % is a PID whose output follows the sensor noise less
+(P and D sized together for the noise goal; with the D part alone held to it, the step overshot by more than
+0.5 %). Other noise draws scatter the model and the overshoot with it (docs/library.md)."""
 
 from __future__ import annotations
 
@@ -16,11 +19,6 @@ from .heatup_step import ScoredStep, model_based_step
 
 SCENARIO = "t4_tclab"
 BOUND_RATIO, MISMATCH_OVERSHOOT_PCT, NOMINAL_OVERSHOOT_PCT = 1.05, 2.0, 0.5
-SHORTFALL = (
-    "0.72 % true overshoot: the identified gain is 1.7 % below the plant's at the step, so the plan switches "
-    "about 2.6 s later than one on the true plant would and holds 0.5 % of output too much, which the PID's "
-    "integral starts taking off only once the path is inside the settling band"
-)
 
 
 @pytest.fixture(scope="module")
@@ -34,6 +32,5 @@ def test_the_tclab_step_enters_the_band_with_the_bound_and_within_the_mismatch_o
     assert tclab_step.overshoot_pct <= MISMATCH_OVERSHOOT_PCT
 
 
-@pytest.mark.xfail(reason=f"known shortfall: {SHORTFALL}", strict=True)
 def test_the_tclab_step_meets_the_nominal_overshoot(tclab_step):
     assert tclab_step.overshoot_pct <= NOMINAL_OVERSHOOT_PCT

@@ -218,21 +218,22 @@ def test_a_zone_still_settling_from_its_last_run_still_tunes(uut) -> None:
 
 
 @pytest.mark.parametrize(("noise", "expected_rule"),
-                         [(0.0, RULE_AMIGO), (0.02, RULE_AMIGO), (0.1, RULE_SIMC)],
-                         ids=["no-noise", "quiet", "noisy"])
+                         [(0.0, RULE_AMIGO), (0.02, RULE_AMIGO), (0.05, RULE_SIMC), (0.1, RULE_SIMC)],
+                         ids=["no-noise", "quiet", "derivative-alone-quiet", "noisy"])
 def test_below_lag_dominated_auto_takes_amigo_where_it_rejects_loads_better_and_noise_allows(
         uut, noise, expected_rule) -> None:
     """tau = 0.05 (a lag-dominated plant): SIMC PI integrates a load step's error to 1.37 x AMIGO's
-    (Tn / Kp); AUTO takes AMIGO unless its derivative, at the rule's own filter Td = fTuneTd Tv, would
-    move the output by more than fTuneNoiseOutput at the noise TUNE measured (Kp noise / fTuneTd)."""
+    (Tn / Kp); AUTO takes AMIGO unless its P and D, at the rule's own filter Td = fTuneTd Tv, would
+    move the output by more than fTuneNoiseOutput at the noise TUNE measured (Kp noise (1 + 1 / fTuneTd)),
+    also where its derivative alone would stay within the goal."""
     plant = Fopdt(k=2.0, t=95.0, l=5.0, noise=noise, rng=random.Random(3))
     run_tune(uut, plant, w=80.0, y_tune=30.0)
     assert uut.get("nTuneState") == TUNE_READY, uut.get("fbUut.nErrorId")
     got = identified(uut)
     assert simc_load_ratio(got["fKs"], got["fTu"], got["fTg"]) > AMIGO_LOAD_GAIN_MIN
     kp_a = rule_values(RULE_AMIGO, got["fKs"], got["fTu"], got["fTg"], got["fVmax"], 30.0)[0]
-    d_noise = kp_a * uut.get("fbUut.fbTuner.fNoise") / uut.get("sPar.fTuneTd")
-    print(f"noise {noise}: AMIGO's derivative would move the output {d_noise:.2f} % p-p "
+    d_noise = kp_a * uut.get("fbUut.fbTuner.fNoise") * (1.0 + 1.0 / uut.get("sPar.fTuneTd"))
+    print(f"noise {noise}: AMIGO's P and D would move the output {d_noise:.2f} % p-p "
           f"(goal {uut.get('sPar.fTuneNoiseOutput')}): rule {uut.get('nRuleUsed')}")
     assert (d_noise <= uut.get("sPar.fTuneNoiseOutput")) == (expected_rule == RULE_AMIGO)
     assert uut.get("nRuleUsed") == expected_rule

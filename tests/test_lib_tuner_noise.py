@@ -41,14 +41,22 @@ def uut() -> ScanDriver:
     return tuner_driver()
 
 
-def filter_time(kp: float, noise_pp: float, goal_pp: float, hold: float, tu: float, share: float) -> float:
-    """docs/library.md: the actual-value filter TUNE sizes so Kp * filtered noise meets the output goal, for
-    noise that holds each value `hold` s (the PV's update interval)."""
-    if kp * noise_pp <= goal_pp:
+def filter_time(gain: float, noise_pp: float, goal_pp: float, hold: float, tu: float, share: float) -> float:
+    """docs/library.md: the actual-value filter TUNE sizes so that the set's gain on noise (Kp, or 2 Kp for
+    AUTO's sets with D) times the filtered noise meets the output goal, for noise that holds each value
+    `hold` s (the PV's update interval)."""
+    if gain * noise_pp <= goal_pp:
         return 0.0
-    r = goal_pp / (kp * noise_pp)
+    r = goal_pp / (gain * noise_pp)
     a = 2 * r * r / (1 + r * r)
     return min(hold * (1 - a) / a, share * tu)
+
+
+def filtered_noise(noise_pp: float, tf: float, hold: float) -> float:
+    """docs/library.md: noise held `hold` s, peak-to-peak, after the first-order actual-value filter (std
+    ratio sqrt(aH / (2 - aH)), aH = H / (Tf + H))."""
+    a = hold / (tf + hold)
+    return noise_pp * math.sqrt(a / (2.0 - a))
 
 
 @pytest.mark.parametrize(("noise", "share"), [(0.5, 0.1), (0.5, 0.02), (0.05, 0.1)],
@@ -135,8 +143,7 @@ def test_the_filter_is_sized_for_noise_the_sensor_holds_for_several_cycles(uut) 
             errors.append(uut.get("fbUut.fXUsed") - plant.x)
             raw.append(x - plant.x)
         sensor.step(uut.get("fbUut.fY"))
-    a = hold / (tf + hold)
-    planned = math.sqrt(a / (2 - a))
+    planned = filtered_noise(1.0, tf, hold)
     kept = float(np.std(errors) / np.std(raw))
     print(f"noise held {hold:.2f} s, filter {tf:.2f} s: std kept {kept:.3f}, planned {planned:.3f}")
     assert kept == pytest.approx(planned, rel=0.15)
@@ -255,16 +262,14 @@ def test_a_noise_limited_set_is_simc_pi_whatever_rule_auto_picked(uut, kp_limit)
         assert got["fTv"] > 0.0
         assert got["fSetpointWeight"] == 0.0
         if kp_limit:
-            a = TS / (tf + TS)
-            assert got["fKp"] * uut.get("fbUut.fbTuner.fNoise") * math.sqrt(a / (2.0 - a)) <= kp_limit * 1.001
+            assert got["fKp"] * filtered_noise(uut.get("fbUut.fbTuner.fNoise"), tf, TS) <= kp_limit * 1.001
             assert share * got["fTu"] < tf <= share * got["fTg"] / (got["fKs"] * got["fKp"]) * 1.001
         return
     assert uut.get("nRuleUsed") == RULE_SIMC
     assert (got["fTv"], got["fTd"]) == (0.0, 0.0)
     assert got["fSetpointWeight"] == pytest.approx(setpoint_weight(RULE_SIMC, 0.0, got["fTn"], got["fTg"]),
                                                    rel=1e-5)
-    a = TS / (tf + TS)
-    noise_filtered = uut.get("fbUut.fbTuner.fNoise") * math.sqrt(a / (2.0 - a))
+    noise_filtered = filtered_noise(uut.get("fbUut.fbTuner.fNoise"), tf, TS)
     assert got["fKp"] == pytest.approx(kp_limit / noise_filtered, rel=1e-3)
     # the filter takes its share of the slower loop's time scale, tau_c + Tu = Tg / (Ks Kp), not of Tu alone
     assert tf == pytest.approx(share * got["fTg"] / (got["fKs"] * got["fKp"]), rel=1e-3)
@@ -288,8 +293,7 @@ def test_a_noise_limited_set_without_a_model_is_simc_pi_on_the_tangent(uut) -> N
     assert uut.get("nRuleUsed") == RULE_SIMC
     assert (got["fTv"], got["fTd"]) == (0.0, 0.0)
     tf = uut.get("sPar.fTFilterTuned")
-    a = TS / (tf + TS)
-    noise_filtered = uut.get("fbUut.fbTuner.fNoise") * math.sqrt(a / (2.0 - a))
+    noise_filtered = filtered_noise(uut.get("fbUut.fbTuner.fNoise"), tf, TS)
     assert got["fKp"] == pytest.approx(kp_limit / noise_filtered, rel=1e-3)
     k_prime = got["fVmax"] / dy
     # the filter's share of the loop's time scale, tau_c + Tu = 1 / (k' Kp)
@@ -303,12 +307,6 @@ def test_a_noise_limited_set_without_a_model_is_simc_pi_on_the_tangent(uut) -> N
     assert got["fTn"] > got["fTu"]
     # the weight's limit for Tn far below Tg: an integrating process has no Tg to compare with
     assert got["fSetpointWeight"] == pytest.approx(SIMC_WEIGHT_0, rel=1e-6)
-
-
-def filtered_noise(noise_pp: float, tf: float, hold: float) -> float:
-    """docs/library.md: noise held `hold` s, peak-to-peak, after the first-order actual-value filter."""
-    a = hold / (tf + hold)
-    return noise_pp * math.sqrt(a / (2.0 - a))
 
 
 OUTPUT_GOAL_PP = 2.0  # fTuneNoiseOutput's default, % peak-to-peak
@@ -357,12 +355,8 @@ def test_p_and_d_together_move_the_output_by_at_most_the_noise_goal(uut, noise, 
     else:
         gain = kp
         want_td = min(max(td_rule, kp * tv * nf / OUTPUT_GOAL_PP), tv)
-    want_tf = 0.0
-    if gain * noise_pp > OUTPUT_GOAL_PP:
-        r = OUTPUT_GOAL_PP / (gain * noise_pp)
-        a = 2 * r * r / (1 + r * r)
-        want_tf = min(TS * (1 - a) / a, share * got["fTu"])
-    assert tf == pytest.approx(want_tf, rel=1e-3, abs=1e-6)
+    assert tf == pytest.approx(filter_time(gain, noise_pp, OUTPUT_GOAL_PP, TS, got["fTu"], share), rel=1e-3,
+                               abs=1e-6)
     assert td == pytest.approx(want_td, rel=1e-3)
     measured = output_noise_pp(uut, plant)
     print(f"{rule=} noise {noise_pp:.3f} p-p: filter {tf:.3f} s, Td {td:.2f} s of Tv {tv:.2f} s; "

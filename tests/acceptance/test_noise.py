@@ -16,6 +16,7 @@ import pytest
 
 from modbus_bridge.runner import HarnessSetup
 from modbus_bridge.scenario import load_scenario, resolve_scenario
+from tests.test_lib_tuner_noise import filtered_noise
 
 from .conftest import run_scenario
 
@@ -30,11 +31,8 @@ VARIANT = "PID (self-tuned)"
 
 
 def _filtered_noise(v: dict) -> float:
-    """Peak-to-peak noise after the tuned filter, for noise held `identified_noise_interval_s` each value
-    (docs/library.md: std ratio sqrt(aH / (2 - aH)), aH = H / (Tf + H))."""
-    hold, tf = v["identified_noise_interval_s"], v["tuned_filter_s"]
-    a = hold / (tf + hold)
-    return v["identified_noise_pp_c"] * (a / (2.0 - a)) ** 0.5
+    """Peak-to-peak noise after the tuned filter, for noise held `identified_noise_interval_s` each value."""
+    return filtered_noise(v["identified_noise_pp_c"], v["tuned_filter_s"], v["identified_noise_interval_s"])
 
 
 def _noisy_seed002(harness: HarnessSetup) -> list:

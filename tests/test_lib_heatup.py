@@ -397,14 +397,16 @@ def oven_bound(t_scale: float = 1.0, k_scale: float = 1.0) -> float:
     return bang_hold_bound(pm, OVEN_W0, OVEN_W1, OVEN_TS, 600.0).settling_s
 
 
-OVEN_BOUND_RATIO = 1.25  # the bang-hold bound may overshoot (1.9 % here); the plan keeps within 0.25 %
+# the bang-hold bound may overshoot (1.9 % here); the plan keeps within 0.25 % (one switch planned so: 1.19x)
+OVEN_BOUND_RATIO = 1.1
 
 
 def test_an_oven_of_equal_lags_lands_on_its_n_lag_model() -> None:
     """One switch from the limit to the holding power lands a first-order lag on W; a chain of four lags
     still rises from the pulse it holds: planned on the first-order model the oven overshoots like the PID
-    alone. Planned on the four lags, the limit time is the longest whose model response peaks within
-    0.25 % of the step past W."""
+    alone. Planned on the four lags, the pulse is longer than one that lands the chain on its own, and the
+    second plan, made where the rise has shown the plant, brakes what the chain holds beyond W: the model's
+    response stays within 0.25 % of the step both ways."""
     bound = oven_bound()
     fopdt_plan, nlag_plan = oven_step(order=1), oven_step(order=OVEN_N)
     print(f"oven 100->150 degC: bound {bound:.1f} s; planned on 4 lags {nlag_plan.settling_s:.1f} s, "

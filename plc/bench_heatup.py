@@ -4,7 +4,8 @@ One PROGRAM calls the block once per scan on seed 003's model with X rising like
 response (so the rise detection, the slope filters and the seen-T average all run), then resting at the
 target, and the next response (the other way) starting every RESTART_SCANS scans; the same program
 without the call is the baseline that is subtracted. The same runs with the model taken as four equal
-lags (the plan made by bisection at every start, the lags and gain read from the rise, the second plan)
+lags (the plan made by bisection at every start, the longer pulse searched for during it, one halving per
+call, the lags and gain read from the rise, the second plan)
 and as two unequal lags (the plan, the line through the rise and the lags read from it), X then rising as
 that chain does. Printed: CPU microseconds per call and its share of a 10 ms cycle, side by side, and the
 longest single scan (where a plan or a fit is made), in the soft-PLC (a Python interpreter of the ST; the

@@ -1,4 +1,4 @@
-"""FC_HeatUpNLagLatePlan and FC_HeatUpNLagLateLands: the longer first pulse of a model-based setpoint response
+"""FB_HeatUpNLagLatePlan and FC_HeatUpNLagLateLands: the longer first pulse of a model-based setpoint response
 on n equal lags, landed by the brake of the second plan made where the rise passes its second point,
 against the same response evaluated densely in double precision. The shares are the bench oven's
 100 -> 150 degC step (four lags of 45 s, 2.2 degC/%, 25 degC ambient: 34.1 % holds 100 degC, 56.8 % holds
@@ -22,17 +22,29 @@ PEAK_SHARE = 0.0025
 A_MAX = 3.0
 DENSE_TOL = 2e-4  # the PLC finds peaks on a grid of 61 points and its landing by bisection in REAL
 
-DECLS = """    nOrder : INT;
+DECLS = """    nOrder, nCalls : INT;
     fA, fLToward, fLAway, fXStart, fRiseSecond, fAMax, fXSecond, fBrake, fFirst, fPlan, fReach : REAL;
-    bLands : BOOL;"""
+    fAfterOne : REAL;
+    bLands : BOOL;
+    fbPlan : FB_HeatUpNLagLatePlan;"""
 BODY = """  bLands := FC_HeatUpNLagLateLands(nOrder := nOrder, fA := fA, fLToward := fLToward,
                                    fLAway := fLAway, fXStart := fXStart, fRiseSecond := fRiseSecond,
                                    fAMax := fAMax, fXSecond => fXSecond, fBrake => fBrake);
   fFirst := FC_HeatUpNLagPlan(nOrder := nOrder, fRatio := 0.0, fLToward := fLToward, fLAway := fLAway,
                               fD := 0.0, fB := 0.0, fXStart := fXStart, fAMax := fAMax);
-  fPlan := FC_HeatUpNLagLatePlan(nOrder := nOrder, fLToward := fLToward, fLAway := fLAway, fAFirst := fFirst,
-                                 fAMax := fAMax, fXStart := fXStart, fRiseSecond := fRiseSecond,
-                                 fReach := fReach);"""
+  fbPlan(bStart := TRUE, nOrder := nOrder, fLToward := fLToward, fLAway := fLAway, fAFirst := fFirst,
+         fAMax := fAMax, fXStart := fXStart, fRiseSecond := fRiseSecond, fReach := fReach);
+  nCalls := 0;
+  fAfterOne := fbPlan.fA;
+  WHILE fbPlan.bBusy DO
+    fbPlan(bStart := FALSE);
+    nCalls := nCalls + 1;
+    IF nCalls = 1 THEN
+      fAfterOne := fbPlan.fA;
+    END_IF;
+  END_WHILE;
+  fPlan := fbPlan.fA;"""
+HALVINGS = 8
 
 
 def step(x: np.ndarray, n: int = ORDER) -> np.ndarray:
@@ -100,6 +112,14 @@ def test_a_rise_past_its_second_point_within_the_pulse_is_braked_where_the_pulse
     assert run(fn, fA=a).get("fXSecond") == pytest.approx(a + X_START, abs=1e-6)
 
 
+def test_the_search_makes_one_halving_per_call_and_its_plan_so_far_is_always_usable(fn: ScanDriver) -> None:
+    """The pulse may end on the plan so far at any call: it only grows, from the single switch's."""
+    got = run(fn, fReach=1.0)
+    assert got.get("nCalls") == HALVINGS
+    assert got.get("fFirst") <= got.get("fAfterOne") <= got.get("fPlan")
+    assert run(fn, fA=got.get("fAfterOne")).get("bLands")
+
+
 def test_the_longest_pulse_lands_within_the_tolerance_and_one_more_step_does_not(fn: ScanDriver) -> None:
     first = run(fn).get("fFirst")
     full = run(fn, fReach=1.0).get("fPlan")
@@ -113,7 +133,7 @@ def test_the_longest_pulse_lands_within_the_tolerance_and_one_more_step_does_not
     assert e > 0.0
     assert peak <= 1.0 + PEAK_SHARE + DENSE_TOL
     assert low >= 1.0 - PEAK_SHARE - DENSE_TOL
-    beyond = full + 0.05 * (full - first)
+    beyond = full + 2.0 * (A_MAX - first) / 2**HALVINGS  # the search's last bracket, twice over
     assert not run(fn, fA=beyond).get("bLands")
 
 

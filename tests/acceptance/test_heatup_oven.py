@@ -1,5 +1,5 @@
 """The model-based setpoint response through Modbus on the bench oven (scenario nlag_oven, four equal lags):
-TUNE identifies the n-lag model (order 4), and the step 100 -> 150 degC planned on it settles within 1.15x
+TUNE identifies the n-lag model (order 4), and the step 100 -> 150 degC planned on it settles within 1.2x
 the bang-hold bound of the true plant with at most 0.5 % overshoot of the true temperature (the PV's peak
 may add the noise measured at rest), where the self-tuned PID alone (AMIGO with its setpoint weight b = 0)
 takes more than twice as long. The
@@ -24,7 +24,7 @@ from .conftest import run_scenario
 SCENARIO = "nlag_oven"
 MODEL_BASED = "model-based PID"
 ORDER = 4
-BOUND_RATIO, OVERSHOOT_PCT = 1.15, 0.5  # one switch, its pulse planned to land the chain alone: 1.24x
+BOUND_RATIO, OVERSHOOT_PCT = 1.2, 0.5  # one switch, its pulse planned to land the chain alone: 1.24x
 PID_ALONE_SLOWER = 2.0  # the PID alone's 2 % settling time over the model-based response's
 HAND_OVER_SHARE = 0.5  # of the PID alone's peak past W after TUNE
 LAGS_AFTER_TUNE = (0.7, 1.3)  # the oven's lags after TUNE, times what TUNE saw

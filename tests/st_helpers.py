@@ -38,3 +38,11 @@ def f32(value: float) -> float:
     import struct
 
     return struct.unpack("f", struct.pack("f", value))[0]
+
+
+def scan_with(drv: Any, defaults: dict[str, float], inputs: dict[str, float]) -> Any:
+    """Set a test program's inputs (the defaults, overridden by `inputs`), run one scan, return the driver."""
+    for name, value in (defaults | inputs).items():
+        drv.set(name, value)
+    drv.scan()
+    return drv

@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 
-from tests.st_helpers import ScanDriver, build_program, load_test_app
+from tests.st_helpers import ScanDriver, build_program, load_test_app, scan_with
 
 TCLAB_RHO = 16.7 / 140.0
 BATH_RHO = 0.033
@@ -64,12 +64,8 @@ def fn() -> ScanDriver:
 
 
 def run(fn: ScanDriver, **inputs: float) -> ScanDriver:
-    values = dict(fRatio=TCLAB_RHO, fA=0.5, fL=L_TOWARD, fE=0.0, fLAway=L_AWAY, fEMax=0.5, fAFirst=0.5,
-                  fReach=1.0) | inputs
-    for name, value in values.items():
-        fn.set(name, value)
-    fn.scan()
-    return fn
+    return scan_with(fn, dict(fRatio=TCLAB_RHO, fA=0.5, fL=L_TOWARD, fE=0.0, fLAway=L_AWAY, fEMax=0.5,
+                              fAFirst=0.5, fReach=1.0), inputs)
 
 
 @pytest.mark.parametrize(("rho", "a", "e"), [(TCLAB_RHO, 0.5, 0.0), (TCLAB_RHO, 0.6, 0.04),

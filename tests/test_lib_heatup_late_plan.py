@@ -6,18 +6,25 @@ against the same response evaluated densely in double precision. The shares are 
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 
-from tests.st_helpers import ScanDriver, build_program, load_test_app
+from tests.st_helpers import ScanDriver, build_program, load_test_app, scan_with
+from tests.test_lib_heatup import (
+    OVEN_AMBIENT,
+    OVEN_K,
+    OVEN_L,
+    OVEN_N,
+    OVEN_T,
+    OVEN_W0,
+    OVEN_W1,
+    oven_unit_step,
+)
 
-ORDER = 4
-Y0, YH = 75.0 / 2.2, 125.0 / 2.2
-L_TOWARD, L_AWAY = (100.0 - Y0) / (YH - Y0), (0.0 - Y0) / (YH - Y0)
-X_START = -3.0 / 45.0  # -L / T
-RISE_SECOND = 0.4  # the second point: twice the first, a fifth of the step
+Y0, YH = (OVEN_W0 - OVEN_AMBIENT) / OVEN_K, (OVEN_W1 - OVEN_AMBIENT) / OVEN_K  # holding powers, %
+L_TOWARD, L_AWAY = (100.0 - Y0) / (YH - Y0), (0.0 - Y0) / (YH - Y0)  # the heater's limits 100 and 0 %
+X_START = -OVEN_L / OVEN_T
+RISE_SECOND = 0.4  # the second point: twice the first, which is a fifth of the step
 PEAK_SHARE = 0.0025
 A_MAX = 3.0
 DENSE_TOL = 2e-4  # the PLC finds peaks on a grid of 61 points and its landing by bisection in REAL
@@ -47,23 +54,17 @@ BODY = """  bLands := FC_HeatUpNLagLateLands(nOrder := nOrder, fA := fA, fLTowar
 HALVINGS = 8
 
 
-def step(x: np.ndarray, n: int = ORDER) -> np.ndarray:
-    """Unit step response of n equal lags at x = (t - L) / T."""
-    x = np.maximum(x, 0.0)
-    return 1.0 - np.exp(-x) * sum(x**k / math.factorial(k) for k in range(n))
-
-
 def response(x: np.ndarray, a: float, c: float = 0.0, e: float = 0.0) -> np.ndarray:
     """L_TOWARD for a lags, the holding power, from c lags after the start L_AWAY for e lags, then the
     holding power again."""
-    m = L_TOWARD * step(x) + (1.0 - L_TOWARD) * step(x - a)
+    m = L_TOWARD * oven_unit_step(x) + (1.0 - L_TOWARD) * oven_unit_step(x - a)
     if e > 0.0:
-        m += (L_AWAY - 1.0) * step(x - c) + (1.0 - L_AWAY) * step(x - c - e)
+        m += (L_AWAY - 1.0) * oven_unit_step(x - c) + (1.0 - L_AWAY) * oven_unit_step(x - c - e)
     return m
 
 
 def dense_x(a: float, c: float = 0.0, e: float = 0.0) -> np.ndarray:
-    return np.linspace(X_START, max(a, c + e) + 3.0 * ORDER + 3.0, 400_001)
+    return np.linspace(X_START, max(a, c + e) + 3.0 * OVEN_N + 3.0, 400_001)
 
 
 def landing(a: float, c: float, e: float, x_from: float) -> tuple[float, float]:
@@ -87,12 +88,8 @@ def fn() -> ScanDriver:
 
 
 def run(fn: ScanDriver, **inputs: float) -> ScanDriver:
-    values = dict(nOrder=ORDER, fA=1.0, fLToward=L_TOWARD, fLAway=L_AWAY, fXStart=X_START,
-                  fRiseSecond=RISE_SECOND, fAMax=A_MAX, fReach=1.0) | inputs
-    for name, value in values.items():
-        fn.set(name, value)
-    fn.scan()
-    return fn
+    return scan_with(fn, dict(nOrder=OVEN_N, fA=1.0, fLToward=L_TOWARD, fLAway=L_AWAY, fXStart=X_START,
+                              fRiseSecond=RISE_SECOND, fAMax=A_MAX, fReach=1.0), inputs)
 
 
 @pytest.mark.parametrize("a", [0.8, 1.0, 1.2])

@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from tests.st_helpers import ScanDriver, build_program, load_test_app
+from tests.st_helpers import ScanDriver, build_program, load_test_app, scan_with
 
 SLOW_S, FAST_S, DELAY_S = 140.0, 16.7, 0.0
 RHO = FAST_S / SLOW_S
@@ -47,11 +47,7 @@ def fn() -> ScanDriver:
 
 
 def run(fn: ScanDriver, **inputs: float) -> ScanDriver:
-    values = dict(fSlope=0.0, fMean=0.0, fT=0.0, fHalf=0.0, fFastIn=1.0, fX=0.0) | inputs
-    for name, value in values.items():
-        fn.set(name, value)
-    fn.scan()
-    return fn
+    return scan_with(fn, dict(fSlope=0.0, fMean=0.0, fT=0.0, fHalf=0.0, fFastIn=1.0, fX=0.0), inputs)
 
 
 def scale(fn: ScanDriver, slope: float, t: float) -> float:

@@ -16,13 +16,16 @@ import os
 import pytest
 
 from modbus_bridge.faults import run_fault
+from modbus_bridge.regmap import load_register_map
 
 from .conftest import PLC_ENV
 
 SLOW_ENV = "THERMOST_SLOW"
 GOAL_AFTER_DEAD_TIME_S = 5.0
 FROZEN_GOAL_S = 30.0
-STALE_GOAL_S = 2.0 + 1.0  # fPvTimeout default + one second
+PV_TIMEOUT_S = load_register_map()["fPvTimeoutZone1"].meta.default  # the stale-PV watchdog the scenarios keep
+STALE_MARGIN_S = 1.0  # allowed past it
+STALE_GOAL_S = PV_TIMEOUT_S + STALE_MARGIN_S
 FAST_PLANTS = ("seed003_hotend_fuzzy", "t1_rrf_hotend")
 SLOW_PLANTS = ("seed000_forming_platform",)
 MODEL_FAULTS = ("heater_open", "sensor_detached", "stuck_on")

@@ -22,6 +22,7 @@ SCENARIO = "seed003_heatup"
 MODEL_BASED, PID_ONLY = "model-based PID", "PID (AUTO)"
 NOMINAL_RATIO, NOMINAL_OVERSHOOT_PCT = 1.05, 0.5
 MISMATCH_RATIO, MISMATCH_OVERSHOOT_PCT = 1.5, 2.0
+SCALES = (0.7, 1.3)  # the plant's time constant after TUNE, times the model's
 ROBUST_MS = 1.6
 
 
@@ -119,7 +120,7 @@ def test_the_hand_over_from_tune_costs_nothing(nominal):
         f"output variation {ret['tv_output_pct']:.0f} % vs the PID's {alone['tv_output_pct']:.0f} %"
 
 
-@pytest.mark.parametrize("scale", [0.7, 1.3])
+@pytest.mark.parametrize("scale", SCALES)
 def test_a_plant_off_its_model_stays_within_the_goals(harness, scale):
     run = _run(harness, scale, (MODEL_BASED,))[MODEL_BASED]
     step = run["step"].values

@@ -16,7 +16,8 @@ import pytest
 
 from modbus_bridge.client import PlcClient
 
-WRITES = int(os.environ.get("THERMOST_FUZZ_WRITES", "50000"))
+DEFAULT_WRITES = 50_000
+WRITES = int(os.environ.get("THERMOST_FUZZ_WRITES", str(DEFAULT_WRITES)))
 WRITES_PER_STEP = 4
 SCANS_PER_STEP = 2
 PROGRESS_STEPS = 25_000  # a line every 100,000 writes (seen with -s)

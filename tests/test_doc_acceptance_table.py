@@ -1,0 +1,204 @@
+"""docs/harness.md's table of the acceptance suite states each file's goals in words. They are tied to the
+constants the tests assert with: every acceptance test file has a row, every goal constant shows in its
+row as the test holds it, and every figure the row states (a ratio, a share, a time, a temperature, a
+count) is one of those goals or a fact of the scenario the file runs. A tightened bound with the table
+left behind fails here."""
+
+from __future__ import annotations
+
+import importlib
+import re
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from modbus_bridge.optimise.robustness import scored_step
+from modbus_bridge.regmap import load_register_map
+from modbus_bridge.scenario import load_scenario, resolve_scenario
+
+ROOT = Path(__file__).resolve().parents[1]
+HARNESS_DOC = ROOT / "docs" / "harness.md"
+ACCEPTANCE = ROOT / "tests" / "acceptance"
+SECTION = "## Acceptance suite"
+# a figure with its unit; the unit-less numbers of a row (bit numbers, seeds) are not goals
+FIGURE = re.compile(r"(?<![\w.,])(\d{1,3}(?:,\d{3})+|\d+(?:\.\d+)?)\s?(×|%|s\b|°C)?")
+METRIC_TERMS = ("2 % settling", "2 % band")  # the metric's name, not a goal (metrics.py)
+COUNT_WORDS = {2: "two", 3: "three"}
+FACTOR_WORDS = {0.5: "half", 2.0: "twice"}
+
+
+def ratio(v: float) -> str:
+    return f"{v:g}×"
+
+
+def pct(v: float) -> str:
+    return f"{v:g} %"
+
+
+def share(v: float) -> str:
+    return f"{v * 100:g} %"
+
+
+def seconds(v: float) -> str:
+    return f"{v:g} s"
+
+
+def degc(v: float) -> str:
+    return f"{v:g} °C"
+
+
+def change(scale: float) -> str:
+    """A plant parameter times `scale`, as a row says it: 30 % for 0.7 and 1.3."""
+    return f"{abs(scale - 1.0) * 100:.0f} %"
+
+
+def count(v: int) -> str:
+    return f"{v:,}"
+
+
+def step_of(scenario: str) -> str:
+    _, y0, r = scored_step(load_scenario(resolve_scenario(scenario)))
+    return f"{y0:g} → {r:g} °C"
+
+
+def noise_of(scenario: str) -> str:
+    sc = load_scenario(resolve_scenario(scenario))
+    return degc(sc.zones[0].sensor.noise_sigma_c)
+
+
+def _m(name: str):
+    return importlib.import_module(f"tests.acceptance.{name}")
+
+
+def _fuzz_writes_in_makefile() -> int:
+    found = re.search(r"THERMOST_FUZZ_WRITES=(\d+)", (ROOT / "Makefile").read_text(encoding="utf-8"))
+    assert found, "Makefile: no THERMOST_FUZZ_WRITES in the fuzz target"
+    return int(found.group(1))
+
+
+# per file: the texts its row must hold, each made from the constant the file asserts with (or the
+# scenario it runs); every figure of the row must come from one of them
+def goals() -> dict[str, Callable[[], list[str]]]:
+    return {
+        "test_acceptance.py": lambda: [
+            share(_m("test_acceptance").IDENTIFICATION_TOLERANCE),
+            pct(_m("test_acceptance").PAPER_OVERSHOOT_PCT),
+            seconds(_m("test_acceptance").PAPER_SETTLING_S),
+            seconds(_m("test_acceptance").PAPER_RECOVERY_S),
+            seconds(_m("test_acceptance").SENSOR_DETECTION_S),
+            seconds(_m("test_acceptance").REACTION_S)],
+        "test_fault_injection.py": lambda: [
+            f"L + {seconds(_m('test_fault_injection').GOAL_AFTER_DEAD_TIME_S)}",
+            seconds(_m("test_fault_injection").FROZEN_GOAL_S),
+            f"watchdog time + {seconds(_m('test_fault_injection').STALE_MARGIN_S)}"],
+        "test_heatup.py": lambda: [
+            ratio(_m("test_heatup").NOMINAL_RATIO), pct(_m("test_heatup").NOMINAL_OVERSHOOT_PCT),
+            ratio(_m("test_heatup").MISMATCH_RATIO), pct(_m("test_heatup").MISMATCH_OVERSHOOT_PCT),
+            *{f"T ±{change(s)}" for s in _m("test_heatup").SCALES}],
+        "test_heatup_oven.py": lambda: [
+            ratio(_m("test_heatup_oven").BOUND_RATIO), pct(_m("test_heatup_oven").OVERSHOOT_PCT),
+            f"{FACTOR_WORDS[_m('test_heatup_oven').PID_ALONE_SLOWER]} as long",
+            *{change(s) for s in _m("test_heatup_oven").LAGS_AFTER_TUNE},
+            *{"longer" if s > 1 else "shorter" for s in _m("test_heatup_oven").LAGS_AFTER_TUNE}],
+        "test_fuzzy_mismatch.py": lambda: [
+            f"Ms ≤ {load_register_map()['fFuzzyMsMaxZone1'].meta.default:g}",
+            f"{change(_dead_time_scale('seed003_mismatch_L130'))} longer",
+            step_of("seed003_mismatch_L130")],
+        "test_fuzzy_platform.py": lambda: [
+            step_of("seed000_forming_platform"),
+            share(_m("test_fuzzy_platform").BAND_SHARE) + " band",
+            seconds(_m("test_fuzzy_platform").TAIL_S),
+            f"{FACTOR_WORDS[_m('test_fuzzy_platform').TAIL_SPAN_SHARE]} the band",
+            pct(_m("test_fuzzy_platform").OVERSHOOT_LIMIT_PCT) + " overshoot limit"],
+        "test_heatup_platform.py": lambda: [
+            step_of("seed000_forming_platform"),
+            ratio(_m("test_heatup_platform").BOUND_RATIO), pct(_m("test_heatup_platform").OVERSHOOT_PCT)],
+        "test_heatup_tclab.py": lambda: [
+            step_of("t4_tclab"), ratio(_m("test_heatup_tclab").BOUND_RATIO),
+            pct(_m("test_heatup_tclab").MISMATCH_OVERSHOOT_PCT),
+            pct(_m("test_heatup_tclab").NOMINAL_OVERSHOOT_PCT)],
+        "test_heatup_mismatch.py": lambda: [
+            *{change(s) for s in _m("test_heatup_mismatch").SCALES},
+            pct(_m("test_heatup_mismatch").MISMATCH_OVERSHOOT_PCT),
+            ratio(_m("test_heatup_mismatch").MISMATCH_BOUND_RATIO)],
+        "test_shared_body.py": lambda: [],
+        "test_noise_draws.py": lambda: [
+            f"{COUNT_WORDS[len(_m('test_noise_draws').SEEDS)]} noise draws", noise_of("t4_tclab")],
+        "test_noise.py": lambda: [
+            degc(_m("test_noise").SENSOR_NOISE_C), pct(_m("test_noise").OUTPUT_STD_GOAL_PCT),
+            f"±{degc(_m('test_noise').RIPPLE_GOAL_C)}"],
+        "test_nominal_sweep.py": lambda: [
+            *{f"±{change(s)}" for pair in _m("test_model_mismatch").SCALES for s in pair}],
+        "test_model_mismatch.py": lambda: [],
+        "test_write_fuzz.py": lambda: [
+            count(_m("test_write_fuzz").DEFAULT_WRITES), count(_fuzz_writes_in_makefile())],
+        "test_persist.py": lambda: [],
+        "test_one_plc.py": lambda: [],
+    }
+
+
+def _dead_time_scale(scenario: str) -> float:
+    sc = load_scenario(resolve_scenario(scenario))
+    scales = [float(d.value) for p in sc.zones[0].phases for d in p.disturbances
+              if d.kind == "dead_time_mismatch"]
+    assert len(scales) == 1, f"{scenario}: expected one dead-time change, found {scales}"
+    return scales[0]
+
+
+def table_rows() -> dict[str, tuple[str, list[str]]]:
+    """File name -> the text of its row and the files the row names (a row naming two files belongs to
+    both, and states the goals of both)."""
+    text = HARNESS_DOC.read_text(encoding="utf-8")
+    assert SECTION in text, f"{HARNESS_DOC.name}: no '{SECTION}' section"
+    section = text.split(SECTION, 1)[1].split("\n## ", 1)[0]
+    rows: dict[str, str] = {}
+    for line in section.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) < 2 or not cells[0].startswith("`test_"):
+            continue
+        names = re.findall(r"`(test_\w+\.py)`", cells[0])
+        for name in names:
+            rows[name] = (" | ".join(cells[1:]), names)
+    return rows
+
+
+def figures(text: str) -> list[str]:
+    """The figures a row states: numbers with a unit, and counts written with thousands separators."""
+    text = re.sub(r"`[^`]*`", "", text)  # register and file names
+    for term in METRIC_TERMS:
+        text = text.replace(term, "")
+    out = []
+    for number, unit in FIGURE.findall(text):
+        if unit:
+            out.append(f"{number}{unit}" if unit == "×" else f"{number} {unit}")
+        elif "," in number:
+            out.append(number)
+    return out
+
+
+ROWS = table_rows()
+GOALS = goals()
+
+
+def test_every_acceptance_file_has_a_row():
+    files = sorted(p.name for p in ACCEPTANCE.glob("test_*.py"))
+    missing = [f for f in files if f not in ROWS]
+    assert not missing, f"{HARNESS_DOC.name}: no row in the acceptance table for {missing}"
+    unknown = [f for f in ROWS if f not in files]
+    assert not unknown, f"{HARNESS_DOC.name}: rows for files that do not exist: {unknown}"
+    untied = [f for f in files if f not in GOALS]
+    assert not untied, f"no goals listed here for {untied}: say which constants their rows state"
+
+
+@pytest.mark.parametrize("name", sorted(GOALS))
+def test_the_row_states_the_goals_the_file_holds(name: str):
+    assert name in ROWS, f"{HARNESS_DOC.name}: no row for {name}"
+    row, shared_with = ROWS[name]
+    wanted = GOALS[name]()
+    missing = [w for w in wanted if w not in row]
+    assert not missing, f"{HARNESS_DOC.name}, row {name}: does not say {missing} (the file holds them)"
+    explained = set(figures(" ; ".join(w for other in shared_with for w in GOALS[other]())))
+    untied = [f for f in figures(row) if f not in explained]
+    assert not untied, (f"{HARNESS_DOC.name}, row {name}: {untied} is not a goal of the file nor a fact "
+                        f"of its scenario (it holds {wanted})")

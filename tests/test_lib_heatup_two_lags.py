@@ -7,7 +7,9 @@ the bound; the bound, one switch too, overshoots 2 % to enter the band early). A
 differs from the model's gets its pulse planned again on the lags the rise shows (its slope the slow lag,
 its level the fast one). A faster rise (a faster sensor, a stronger heater: the slope cannot tell them
 apart) is planned on the lag seen, with a brake half the way to the longest it allows (without the new
-plan, a sensor 30 % faster overshot 16.5 %; with the brake as far as the model's, 2.85 %); a slower one (a
+plan, a sensor 30 % faster overshot 16.5 %; with the brake as far as the model's, 2.85 %), the slow lag the
+shortest within a standard error of the line's slope and level (read as it came out, 3 of 7 noise draws of
+both lags 30 % shorter overshot past 2 %, and one of a sensor 30 % faster); a slower one (a
 slower sensor, a weaker heater) halfway to it, on the square root of its scale (planned on the model's
 lags, a sensor 30 % slower overshot 2.75 %; on the lag seen, a 20 % weaker heater stalled below W, 1.62 x
 the bound; with a brake, that heater took 1.51 x), with one switch. The PID follows the path, its
@@ -44,10 +46,11 @@ OVERSHOOT_GOAL = 0.5
 BOUND_RATIO_GOAL = 1.05
 MISMATCH_OVERSHOOT_GOAL, MISMATCH_BOUND_RATIO_GOAL = 2.0, 1.5
 MISMATCH_SEED = 7
-# a 20 % stronger heater with the integrator resting until the path is in the band (not ahead of it): 3.50 %
-STRONGER_HEATER_OVERSHOOT_MAX = 3.0
+# a 20 % stronger heater over NOMINAL_SEEDS: planned on the slow lag as read, mean 3.98 %, worst 6.53 %
+STRONGER_HEATER_MEAN_MAX, STRONGER_HEATER_WORST_MAX = 3.5, 4.0
 NOMINAL_SEEDS = range(1, 8)
 FAST_BLOCK_SEEDS = (1, 2)
+FASTER_RISES = {"sensor x0.7": dict(sensor=0.7), "both x0.7": dict(sensor=0.7, block=0.7)}
 
 
 def plant_params(sensor: float = 1.0, block: float = 1.0, gain: float = 1.0) -> dict:
@@ -91,13 +94,9 @@ def test_two_unequal_lags_land_on_their_model() -> None:
 
 
 MISMATCH_SHORTFALLS = {
-    "both x0.7": "at 0.2 degC of noise the line reads a faster rise's lags with a scatter of about a tenth "
-                 "(slow x0.76, fast x0.61 for a plant at x0.7 in this draw); the pulse planned on a slow lag "
-                 "read longer than the plant's carries it past W: 2.43 %, 1.31 x (noise draws 1-6: 3 of 6 "
-                 "past 2 %)",
-    "gain x1.2": "the rise reads as a slow lag 29 % shorter, so the pulse ends early, and the model's "
-                 "holding power then carries the stronger heater past W before its integral, acting once X "
-                 "runs ahead of the path, has taken that power off: 2.54 %, 2.03 x",
+    "gain x1.2": "the rise reads as a slow lag 23 % shorter (planned on 32 %, within the line's errors), "
+                 "so the pulse ends early, and the model's holding power then carries the stronger heater "
+                 "past W before its integral has taken that power off: 3.01 %, 2.34 x",
 }
 
 
@@ -120,6 +119,18 @@ def test_two_lags_unlike_their_model_stay_within_the_mismatch_goals(mismatch: di
     assert got.settling_s <= MISMATCH_BOUND_RATIO_GOAL * got.bound_s
 
 
+@pytest.mark.parametrize("label", list(FASTER_RISES))
+def test_a_faster_rise_stays_within_the_mismatch_goals_over_noise_draws(label: str) -> None:
+    """The lags read from a faster rise scatter with the noise (the level's error reaches the slow lag through
+    the fast one); planned on the shortest slow lag within a standard error, every draw lands within the
+    mismatch goals, where the lag as read carried 4 of 14 draws past 2 %."""
+    runs = [step(**FASTER_RISES[label], seed=seed) for seed in NOMINAL_SEEDS]
+    figures = ", ".join(f"{r.settling_s / r.bound_s:.2f} x / {r.overshoot_pct:.2f} %" for r in runs)
+    print(f"{label}, noise draws {NOMINAL_SEEDS.start}-{NOMINAL_SEEDS.stop - 1}: {figures}")
+    assert max(r.overshoot_pct for r in runs) <= MISMATCH_OVERSHOOT_GOAL
+    assert max(r.settling_s / r.bound_s for r in runs) <= MISMATCH_BOUND_RATIO_GOAL
+
+
 @pytest.mark.parametrize("seed", FAST_BLOCK_SEEDS)
 def test_a_faster_block_gets_its_brake_planned_on_its_own_fast_lag(seed: int) -> None:
     """A brake is timed on the fast lag: a block 30 % faster, its slow lag the model's, overshot 2.27 and
@@ -133,10 +144,16 @@ def test_a_faster_block_gets_its_brake_planned_on_its_own_fast_lag(seed: int) ->
 
 
 def test_a_plant_ahead_of_the_path_gets_its_integral_before_it_passes_w() -> None:
-    """A stronger heater than the model's runs ahead of the path at the model's holding power; waiting for
-    the path to reach the band before integrating let it overshoot 3.50 %. It still misses the mismatch goal
-    (the expected failure above), by less."""
-    got = step(gain=1.2)
-    print(f"gain x1.2: overshoot {got.overshoot_pct:.2f} %, "
-          f"settling {got.settling_s / got.bound_s:.2f} x the bound")
-    assert got.overshoot_pct <= STRONGER_HEATER_OVERSHOOT_MAX
+    """A stronger heater than the model's runs past W at the model's holding power. Its integral acts once X
+    runs ahead of the path (waiting for the path to reach the band let one draw overshoot 3.50 % instead of
+    2.54 % with the lag as read); planned on the shortest slow lag the rise allows, the path runs ahead of
+    the plant for longer, so that share is small now (a mean of 3.35 % without it), but the overshoot no
+    longer depends on how long the noise made the lag read. It still misses the mismatch goal (the expected
+    failure above)."""
+    runs = [step(gain=1.2, seed=seed) for seed in NOMINAL_SEEDS]
+    overshoots = [r.overshoot_pct for r in runs]
+    print(f"gain x1.2, noise draws {NOMINAL_SEEDS.start}-{NOMINAL_SEEDS.stop - 1}: overshoot "
+          f"{', '.join(f'{o:.2f}' for o in overshoots)} % (mean {np.mean(overshoots):.2f} %), settling "
+          f"{', '.join(f'{r.settling_s / r.bound_s:.2f}' for r in runs)} x the bound")
+    assert float(np.mean(overshoots)) <= STRONGER_HEATER_MEAN_MAX
+    assert max(overshoots) <= STRONGER_HEATER_WORST_MAX

@@ -8,8 +8,9 @@ differs from the model's gets its pulse planned again on the lags the rise shows
 its level the fast one). A faster rise (a faster sensor, a stronger heater: the slope cannot tell them
 apart) is planned on the lag seen, with a brake half the way to the longest it allows (without the new
 plan, a sensor 30 % faster overshot 16.5 %; with the brake as far as the model's, 2.85 %), the slow lag the
-shortest within a standard error of the line's slope and level (read as it came out, 3 of 7 noise draws of
-both lags 30 % shorter overshot past 2 %, and one of a sensor 30 % faster); a slower one (a
+shortest within a standard error of the line's slope and level, with the fast lag read with it (read as it
+came out, 4 of 7 noise draws of both lags 30 % shorter overshot past 2 %, and 1 of 7 of a sensor 30 %
+faster); a slower one (a
 slower sensor, a weaker heater) halfway to it, on the square root of its scale (planned on the model's
 lags, a sensor 30 % slower overshot 2.75 %; on the lag seen, a 20 % weaker heater stalled below W, 1.62 x
 the bound; with a brake, that heater took 1.51 x), with one switch. The PID follows the path, its
@@ -96,7 +97,7 @@ def test_two_unequal_lags_land_on_their_model() -> None:
 MISMATCH_SHORTFALLS = {
     "gain x1.2": "the rise reads as a slow lag 23 % shorter (planned on 32 %, within the line's errors), "
                  "so the pulse ends early, and the model's holding power then carries the stronger heater "
-                 "past W before its integral has taken that power off: 3.01 %, 2.34 x",
+                 "past W before its integral has taken that power off: 2.65 %, 2.36 x",
 }
 
 
@@ -123,7 +124,7 @@ def test_two_lags_unlike_their_model_stay_within_the_mismatch_goals(mismatch: di
 def test_a_faster_rise_stays_within_the_mismatch_goals_over_noise_draws(label: str) -> None:
     """The lags read from a faster rise scatter with the noise (the level's error reaches the slow lag through
     the fast one); planned on the shortest slow lag within a standard error, every draw lands within the
-    mismatch goals, where the lag as read carried 4 of 14 draws past 2 %."""
+    mismatch goals, where the lags as read carried 5 of 14 draws past 2 %."""
     runs = [step(**FASTER_RISES[label], seed=seed) for seed in NOMINAL_SEEDS]
     figures = ", ".join(f"{r.settling_s / r.bound_s:.2f} x / {r.overshoot_pct:.2f} %" for r in runs)
     print(f"{label}, noise draws {NOMINAL_SEEDS.start}-{NOMINAL_SEEDS.stop - 1}: {figures}")
@@ -147,7 +148,8 @@ def test_a_plant_ahead_of_the_path_gets_its_integral_before_it_passes_w() -> Non
     """A stronger heater than the model's runs past W at the model's holding power. Its integral acts once X
     runs ahead of the path (waiting for the path to reach the band let one draw overshoot 3.50 % instead of
     2.54 % with the lag as read); planned on the shortest slow lag the rise allows, the path runs ahead of
-    the plant for longer, so that share is small now (a mean of 3.35 % without it), but the overshoot no
+    the plant for longer, so that share is small now (a mean of 3.14 % without it, 3.00 % with it), but the
+    overshoot no
     longer depends on how long the noise made the lag read. It still misses the mismatch goal (the expected
     failure above)."""
     runs = [step(gain=1.2, seed=seed) for seed in NOMINAL_SEEDS]

@@ -64,6 +64,9 @@ class Step:
     settling_s: float
     overshoot_pct: float
     bound_s: float
+    read: tuple[float, float]  # the slow and fast lag the rise's line read, over the model's (0: none)
+    planned: float  # the slow lag planned on, over the model's
+    seen: tuple[float, float]  # the plant published: Tu, Tg of the two-point FOPDT (s)
 
 
 @functools.cache
@@ -79,7 +82,10 @@ def step(sensor: float = 1.0, block: float = 1.0, gain: float = 1.0, seed: int =
     plant, dist = TransferFunctionPlant(**params), PlantDisturbance.for_channels(1)
     got = step_from_rest(drv, plant, dist, TS, REST_S, HORIZON_S, W0, W1, NOISE, seed=seed)
     bound = bang_hold_bound(PlantModel("transfer_function", params), W0, W1, TS, HORIZON_S).settling_s
-    return Step(got.settling_s, got.overshoot_pct, bound)
+    hu = "fbUut.fbHeatUp."
+    return Step(got.settling_s, got.overshoot_pct, bound,
+                (drv.get(hu + "fLagScale"), drv.get(hu + "fFastScale")), drv.get(hu + "fLagPlanScale"),
+                (drv.get(hu + "fTuSeen"), drv.get(hu + "fTgSeen")))
 
 
 def test_two_unequal_lags_land_on_their_model() -> None:
@@ -130,6 +136,21 @@ def test_a_faster_rise_stays_within_the_mismatch_goals_over_noise_draws(label: s
     print(f"{label}, noise draws {NOMINAL_SEEDS.start}-{NOMINAL_SEEDS.stop - 1}: {figures}")
     assert max(r.overshoot_pct for r in runs) <= MISMATCH_OVERSHOOT_GOAL
     assert max(r.settling_s / r.bound_s for r in runs) <= MISMATCH_BOUND_RATIO_GOAL
+
+
+@pytest.mark.parametrize("sensor", [0.7, 1.3])
+def test_the_plant_published_is_the_one_the_line_read_not_the_one_planned_on(sensor: float) -> None:
+    """A faster rise is planned on a slow lag below the one read, a slower one between the read and the
+    model's; the plant the response publishes (fHeatUpTuSeen, fHeatUpTgSeen) is the two-point FOPDT of the
+    lags read."""
+    got = step(sensor=sensor)
+    slow, fast = got.read
+    tu, tg = two_lags_two_point(slow * T_SENSOR, fast * T_BLOCK)
+    print(f"sensor x{sensor}: read slow x{slow:.3f}, fast x{fast:.3f}, planned slow x{got.planned:.3f}; "
+          f"published Tu {got.seen[0]:.2f} s, Tg {got.seen[1]:.1f} s (read: {tu:.2f} s, {tg:.1f} s)")
+    assert abs(got.planned - slow) > 0.05  # the plan is not the read: the checks below tell them apart
+    assert got.seen[1] == pytest.approx(tg, rel=0.01)
+    assert got.seen[0] == pytest.approx(tu, rel=0.02)
 
 
 @pytest.mark.parametrize("seed", FAST_BLOCK_SEEDS)

@@ -6,16 +6,18 @@ left behind fails here."""
 
 from __future__ import annotations
 
+import functools
 import importlib
 import re
 from collections.abc import Callable
 from pathlib import Path
+from types import ModuleType
 
 import pytest
 
 from modbus_bridge.optimise.robustness import scored_step
 from modbus_bridge.regmap import load_register_map
-from modbus_bridge.scenario import load_scenario, resolve_scenario
+from modbus_bridge.scenario import Scenario, load_scenario, resolve_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 HARNESS_DOC = ROOT / "docs" / "harness.md"
@@ -49,18 +51,23 @@ def count(v: int) -> str:
     return f"{v:,}"
 
 
-def step_of(scenario: str) -> str:
-    _, y0, r = scored_step(load_scenario(resolve_scenario(scenario)))
+@functools.cache
+def scenario(name: str) -> Scenario:
+    return load_scenario(resolve_scenario(name))
+
+
+def step_of(name: str) -> str:
+    _, y0, r = scored_step(scenario(name))
     return f"{y0:g} → {r:g} °C"
 
 
-def noise_of(scenario: str) -> str:
-    sc = load_scenario(resolve_scenario(scenario))
-    return degc(sc.zones[0].sensor.noise_sigma_c)
+def noise_of(name: str) -> str:
+    return degc(scenario(name).zones[0].sensor.noise_sigma_c)
 
 
-def _m(name: str):
-    return importlib.import_module(f"tests.acceptance.{name}")
+def module(name: str) -> ModuleType:
+    """The acceptance test file's module."""
+    return importlib.import_module(f"tests.acceptance.{name.removesuffix('.py')}")
 
 
 def _fuzz_writes_in_makefile() -> int:
@@ -71,70 +78,56 @@ def _fuzz_writes_in_makefile() -> int:
 
 # per file: the texts its row must hold, each made from the constant the file asserts with (or the
 # scenario it runs); every figure of the row must come from one of them
-def goals() -> dict[str, Callable[[], list[str]]]:
+def goals() -> dict[str, Callable[[ModuleType], list[str]]]:
+    """File name -> the texts its row must hold, from the file's module (or the scenario it runs)."""
     return {
-        "test_acceptance.py": lambda: [
-            share(_m("test_acceptance").IDENTIFICATION_TOLERANCE),
-            pct(_m("test_acceptance").PAPER_OVERSHOOT_PCT),
-            seconds(_m("test_acceptance").PAPER_SETTLING_S),
-            seconds(_m("test_acceptance").PAPER_RECOVERY_S),
-            seconds(_m("test_acceptance").SENSOR_DETECTION_S),
-            seconds(_m("test_acceptance").REACTION_S)],
-        "test_fault_injection.py": lambda: [
-            f"L + {seconds(_m('test_fault_injection').GOAL_AFTER_DEAD_TIME_S)}",
-            seconds(_m("test_fault_injection").FROZEN_GOAL_S),
-            f"watchdog time + {seconds(_m('test_fault_injection').STALE_MARGIN_S)}"],
-        "test_heatup.py": lambda: [
-            ratio(_m("test_heatup").NOMINAL_RATIO), pct(_m("test_heatup").NOMINAL_OVERSHOOT_PCT),
-            ratio(_m("test_heatup").MISMATCH_RATIO), pct(_m("test_heatup").MISMATCH_OVERSHOOT_PCT),
-            *{f"T ±{change(s)}" for s in _m("test_heatup").SCALES}],
-        "test_heatup_oven.py": lambda: [
-            ratio(_m("test_heatup_oven").BOUND_RATIO), pct(_m("test_heatup_oven").OVERSHOOT_PCT),
-            f"{FACTOR_WORDS[_m('test_heatup_oven').PID_ALONE_SLOWER]} as long",
-            *{change(s) for s in _m("test_heatup_oven").LAGS_AFTER_TUNE},
-            *{"longer" if s > 1 else "shorter" for s in _m("test_heatup_oven").LAGS_AFTER_TUNE}],
-        "test_fuzzy_mismatch.py": lambda: [
+        "test_acceptance.py": lambda m: [
+            share(m.IDENTIFICATION_TOLERANCE), pct(m.PAPER_OVERSHOOT_PCT), seconds(m.PAPER_SETTLING_S),
+            seconds(m.PAPER_RECOVERY_S), seconds(m.SENSOR_DETECTION_S), seconds(m.REACTION_S)],
+        "test_fault_injection.py": lambda m: [
+            f"L + {seconds(m.GOAL_AFTER_DEAD_TIME_S)}", seconds(m.FROZEN_GOAL_S),
+            f"watchdog time + {seconds(m.STALE_MARGIN_S)}"],
+        "test_heatup.py": lambda m: [
+            ratio(m.NOMINAL_RATIO), pct(m.NOMINAL_OVERSHOOT_PCT), ratio(m.MISMATCH_RATIO),
+            pct(m.MISMATCH_OVERSHOOT_PCT), *{f"T ±{change(s)}" for s in m.SCALES}],
+        "test_heatup_oven.py": lambda m: [
+            ratio(m.BOUND_RATIO), pct(m.OVERSHOOT_PCT), f"{FACTOR_WORDS[m.PID_ALONE_SLOWER]} as long",
+            *{change(s) for s in m.LAGS_AFTER_TUNE},
+            *{"longer" if s > 1 else "shorter" for s in m.LAGS_AFTER_TUNE}],
+        "test_fuzzy_mismatch.py": lambda m: [
             f"Ms ≤ {load_register_map()['fFuzzyMsMaxZone1'].meta.default:g}",
-            f"{change(_dead_time_scale('seed003_mismatch_L130'))} longer",
-            step_of("seed003_mismatch_L130")],
-        "test_fuzzy_platform.py": lambda: [
-            step_of("seed000_forming_platform"),
-            share(_m("test_fuzzy_platform").BAND_SHARE) + " band",
-            seconds(_m("test_fuzzy_platform").TAIL_S),
-            f"{FACTOR_WORDS[_m('test_fuzzy_platform').TAIL_SPAN_SHARE]} the band",
-            pct(_m("test_fuzzy_platform").OVERSHOOT_LIMIT_PCT) + " overshoot limit"],
-        "test_heatup_platform.py": lambda: [
-            step_of("seed000_forming_platform"),
-            ratio(_m("test_heatup_platform").BOUND_RATIO), pct(_m("test_heatup_platform").OVERSHOOT_PCT)],
-        "test_heatup_tclab.py": lambda: [
-            step_of("t4_tclab"), ratio(_m("test_heatup_tclab").BOUND_RATIO),
-            pct(_m("test_heatup_tclab").MISMATCH_OVERSHOOT_PCT),
-            pct(_m("test_heatup_tclab").NOMINAL_OVERSHOOT_PCT)],
-        "test_heatup_mismatch.py": lambda: [
-            *{change(s) for s in _m("test_heatup_mismatch").SCALES},
-            pct(_m("test_heatup_mismatch").MISMATCH_OVERSHOOT_PCT),
-            ratio(_m("test_heatup_mismatch").MISMATCH_BOUND_RATIO)],
-        "test_shared_body.py": lambda: [],
-        "test_noise_draws.py": lambda: [
-            f"{COUNT_WORDS[len(_m('test_noise_draws').SEEDS)]} noise draws", noise_of("t4_tclab")],
-        "test_noise.py": lambda: [
-            degc(_m("test_noise").SENSOR_NOISE_C), pct(_m("test_noise").OUTPUT_STD_GOAL_PCT),
-            f"±{degc(_m('test_noise').RIPPLE_GOAL_C)}"],
-        "test_nominal_sweep.py": lambda: [
-            *{f"±{change(s)}" for pair in _m("test_model_mismatch").SCALES for s in pair}],
-        "test_model_mismatch.py": lambda: [],
-        "test_write_fuzz.py": lambda: [
-            count(_m("test_write_fuzz").DEFAULT_WRITES), count(_fuzz_writes_in_makefile())],
-        "test_persist.py": lambda: [],
-        "test_one_plc.py": lambda: [],
+            f"{change(_dead_time_scale('seed003_mismatch_L130'))} longer", step_of("seed003_mismatch_L130")],
+        "test_fuzzy_platform.py": lambda m: [
+            step_of("seed000_forming_platform"), share(m.BAND_SHARE) + " band", seconds(m.TAIL_S),
+            f"{FACTOR_WORDS[m.TAIL_SPAN_SHARE]} the band", pct(m.OVERSHOOT_LIMIT_PCT) + " overshoot limit"],
+        "test_heatup_platform.py": lambda m: [
+            step_of("seed000_forming_platform"), ratio(m.BOUND_RATIO), pct(m.OVERSHOOT_PCT)],
+        "test_heatup_tclab.py": lambda m: [
+            step_of("t4_tclab"), ratio(m.BOUND_RATIO), pct(m.MISMATCH_OVERSHOOT_PCT),
+            pct(m.NOMINAL_OVERSHOOT_PCT)],
+        "test_heatup_mismatch.py": lambda m: [
+            *{change(s) for s in m.SCALES}, pct(m.MISMATCH_OVERSHOOT_PCT), ratio(m.MISMATCH_BOUND_RATIO)],
+        "test_shared_body.py": lambda m: [],
+        "test_noise_draws.py": lambda m: [f"{COUNT_WORDS[len(m.SEEDS)]} noise draws", noise_of("t4_tclab")],
+        "test_noise.py": lambda m: [
+            degc(m.SENSOR_NOISE_C), pct(m.OUTPUT_STD_GOAL_PCT), f"±{degc(m.RIPPLE_GOAL_C)}"],
+        "test_nominal_sweep.py": lambda m: [
+            *{f"±{change(s)}" for pair in module("test_model_mismatch.py").SCALES for s in pair}],
+        "test_model_mismatch.py": lambda m: [],
+        "test_write_fuzz.py": lambda m: [count(m.DEFAULT_WRITES), count(_fuzz_writes_in_makefile())],
+        "test_persist.py": lambda m: [],
+        "test_one_plc.py": lambda m: [],
     }
 
 
-def _dead_time_scale(scenario: str) -> float:
-    sc = load_scenario(resolve_scenario(scenario))
-    scales = [float(d.value) for p in sc.zones[0].phases for d in p.disturbances
+def goals_of(name: str) -> list[str]:
+    return GOALS[name](module(name))
+
+
+def _dead_time_scale(name: str) -> float:
+    scales = [float(d.value) for p in scenario(name).zones[0].phases for d in p.disturbances
               if d.kind == "dead_time_mismatch"]
-    assert len(scales) == 1, f"{scenario}: expected one dead-time change, found {scales}"
+    assert len(scales) == 1, f"{name}: expected one dead-time change, found {scales}"
     return scales[0]
 
 
@@ -187,10 +180,10 @@ def test_every_acceptance_file_has_a_row():
 def test_the_row_states_the_goals_the_file_holds(name: str):
     assert name in ROWS, f"{HARNESS_DOC.name}: no row for {name}"
     row, shared_with = ROWS[name]
-    wanted = GOALS[name]()
+    wanted = goals_of(name)
     missing = [w for w in wanted if w not in row]
     assert not missing, f"{HARNESS_DOC.name}, row {name}: does not say {missing} (the file holds them)"
-    explained = set(figures(" ; ".join(w for other in shared_with for w in GOALS[other]())))
+    explained = set(figures(" ; ".join(w for other in shared_with for w in goals_of(other))))
     untied = [f for f in figures(row) if f not in explained]
     assert not untied, (f"{HARNESS_DOC.name}, row {name}: {untied} is not a goal of the file nor a fact "
                         f"of its scenario (it holds {wanted})")

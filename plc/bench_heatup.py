@@ -83,7 +83,7 @@ def run(quick: bool) -> None:
     for order, ratio, scale, label in (
             (1, 0.0, 1.0, "first-order model"), (NLAG_ORDER, 0.0, 1.0, f"{NLAG_ORDER} equal lags"),
             (2, TWO_LAG_RATIO, 1.0, "two unequal lags"),
-            (2, TWO_LAG_RATIO, FASTER_PLANT, f"two unequal lags, a plant's {FASTER_PLANT:g} x")):
+            (2, TWO_LAG_RATIO, FASTER_PLANT, f"two unequal lags, the plant's {FASTER_PLANT:g} x")):
         try:
             cost, active, longest = heatup_cost(quick, order, ratio, scale)
         except Exception as exc:  # noqa: BLE001 - a benchmark reports, it does not fail

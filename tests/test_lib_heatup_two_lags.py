@@ -170,9 +170,8 @@ def test_a_plant_ahead_of_the_path_gets_its_integral_before_it_passes_w() -> Non
     runs ahead of the path (waiting for the path to reach the band let one draw overshoot 3.50 % instead of
     2.54 % with the lag as read); planned on the shortest slow lag the rise allows, the path runs ahead of
     the plant for longer, so that share is small now (a mean of 3.14 % without it, 3.00 % with it), but the
-    overshoot no
-    longer depends on how long the noise made the lag read. It still misses the mismatch goal (the expected
-    failure above)."""
+    overshoot no longer depends on how long the noise made the lag read. It still misses the mismatch goal
+    (the expected failure above)."""
     runs = [step(gain=1.2, seed=seed) for seed in NOMINAL_SEEDS]
     overshoots = [r.overshoot_pct for r in runs]
     print(f"gain x1.2, noise draws {NOMINAL_SEEDS.start}-{NOMINAL_SEEDS.stop - 1}: overshoot "

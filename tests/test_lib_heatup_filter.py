@@ -11,7 +11,20 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from tests.test_lib_heatup import ACTIVE, HORIZON, STEP_AT, TS, W0, W1, K, L, T, bound_s, controller
+from tests.test_lib_heatup import (
+    ACTIVE,
+    HORIZON,
+    STEP_AT,
+    TS,
+    W0,
+    W1,
+    K,
+    L,
+    T,
+    bound_s,
+    controller,
+    step_figures,
+)
 from tests.test_lib_tuner import Fopdt
 
 FILTER_S = 2.0  # s, of the order TUNE sizes for 0.2 degC of noise on a hot end
@@ -38,7 +51,8 @@ def filtered_step() -> FilteredStep:
     drv.set("fbUut.fW1", W0)
     drv.set("nMode", ACTIVE)
     i_after, y_hold, gap, was_limit = None, 0.0, 0.0, False
-    xs: list[tuple[float, float]] = []
+    t_s: list[float] = []
+    xs: list[float] = []
     start = round(REST_S / TS)
     for n in range(start + round((HORIZON - STEP_AT) / TS)):
         if n == start:
@@ -56,13 +70,11 @@ def filtered_step() -> FilteredStep:
         was_limit = was_limit or limit
         plant.step(drv.get("fbUut.fY"))
         if n >= start:
-            xs.append(((n - start) * TS, plant.x))
+            t_s.append((n - start) * TS)
+            xs.append(plant.x)
     assert i_after is not None, "no limit phase ended"
-    band = 0.02 * (W1 - W0)
-    outside = [t for t, x in xs if abs(x - W1) > band]
-    settling = outside[-1] + TS if outside else 0.0
-    overshoot = max(0.0, max(x - W1 for _, x in xs)) / (W1 - W0) * 100.0
-    return FilteredStep(i_after, y_hold, gap, settling, overshoot)
+    figures = step_figures(t_s, xs, W0, W1, TS)
+    return FilteredStep(i_after, y_hold, gap, figures.settling_s, figures.overshoot_pct)
 
 
 def test_behind_the_tuned_filter_the_path_is_held_at_the_holding_power() -> None:

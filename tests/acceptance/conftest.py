@@ -23,6 +23,7 @@ from modbus_bridge.scenario import Scenario
 PLC_ENV = "THERMOST_PLC"
 STATE_ERROR = ControllerCodes.load().states["ERROR"]
 SPEED_ENV = "THERMOST_PLC_SPEED"
+SLOW_ENV = "THERMOST_SLOW"
 
 
 def pytest_collection_modifyitems(items):
@@ -46,6 +47,13 @@ def harness() -> HarnessSetup:
         except ImportError as exc:
             pytest.skip(f"the embedded soft-PLC is missing ({exc}) and {PLC_ENV} is not set")
     return setup
+
+
+def skip_known_shortfall(label: str, why: str) -> None:
+    """A goal not met yet: skipped in CI with the reason; with THERMOST_SLOW=1 the test runs, marked by its
+    file as a strict expected failure."""
+    if not os.environ.get(SLOW_ENV):
+        pytest.skip(f"known shortfall, {label}: {why} ({SLOW_ENV}=1 runs it as an expected failure)")
 
 
 def run_scenario(setup: HarnessSetup, scenario: Scenario):

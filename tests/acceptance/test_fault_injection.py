@@ -18,9 +18,8 @@ import pytest
 from modbus_bridge.faults import run_fault
 from modbus_bridge.regmap import load_register_map
 
-from .conftest import PLC_ENV
+from .conftest import PLC_ENV, SLOW_ENV, skip_known_shortfall
 
-SLOW_ENV = "THERMOST_SLOW"
 GOAL_AFTER_DEAD_TIME_S = 5.0
 FROZEN_GOAL_S = 30.0
 PV_TIMEOUT_S = load_register_map()["fPvTimeoutZone1"].meta.default  # the stale-PV watchdog the scenarios keep
@@ -63,10 +62,8 @@ SHORTFALLS = {
 def shortfall(plant: str, fault: str) -> None:
     """Skip (CI) or mark as an expected failure (THERMOST_SLOW=1) a goal known not to be met yet."""
     why = SHORTFALLS.get((plant, fault))
-    if why is None:
-        return
-    if not os.environ.get(SLOW_ENV):
-        pytest.skip(f"known shortfall, {plant} {fault}: {why} ({SLOW_ENV}=1 runs it as an expected failure)")
+    if why is not None:
+        skip_known_shortfall(f"{plant} {fault}", why)
 
 
 def cases():

@@ -12,12 +12,11 @@ that offset also left other noise draws below W for minutes (docs/library.md).""
 
 from __future__ import annotations
 
-import os
-
 import pytest
 
 from modbus_bridge.scenario import load_scenario, resolve_scenario
 
+from .conftest import skip_known_shortfall
 from .heatup_step import ScoredStep, model_based_step
 
 SCENARIO = "t4_tclab"
@@ -42,8 +41,5 @@ def test_the_tclab_step_enters_the_band_with_the_bound_and_within_the_mismatch_o
 
 @pytest.mark.xfail(reason=f"known shortfall: {SHORTFALLS['nominal overshoot']}", strict=True)
 def test_the_tclab_step_meets_the_nominal_overshoot(tclab_step):
-    if not os.environ.get("THERMOST_SLOW"):
-        why = SHORTFALLS["nominal overshoot"]
-        pytest.skip(f"known shortfall, nominal overshoot: {why} (THERMOST_SLOW=1 runs it as an expected "
-                    "failure)")
+    skip_known_shortfall(f"{SCENARIO} nominal overshoot", SHORTFALLS["nominal overshoot"])
     assert tclab_step.overshoot_pct <= NOMINAL_OVERSHOOT_PCT

@@ -11,7 +11,7 @@ import pytest
 
 from modbus_bridge.scenario import load_scenario, resolve_scenario, shipped_scenarios
 
-from .conftest import assert_no_alarm, run_scenario
+from .conftest import assert_no_alarm, run_scenario, skip_known_shortfall
 
 QUICK = {"seed003_hotend_fuzzy": "PID (self-tuned)", "t3_marlin_hotend": None}
 NOT_NOMINAL = ("seed003_sensor_fault",)  # the fault-injection scenario
@@ -32,9 +32,8 @@ def cases():
 
 @pytest.mark.parametrize("name", list(cases()))
 def test_nominal_scenario_raises_no_alarm(harness, name):
-    if name in SHORTFALLS and not os.environ.get("THERMOST_SLOW"):
-        why = SHORTFALLS[name]
-        pytest.skip(f"known shortfall, {name}: {why} (THERMOST_SLOW=1 runs it as an expected failure)")
+    if name in SHORTFALLS:
+        skip_known_shortfall(name, SHORTFALLS[name])
     if name not in QUICK and not os.environ.get("THERMOST_SLOW"):
         pytest.skip(f"{name}: full nominal sweep with THERMOST_SLOW=1 (CI time)")
     sc = load_scenario(resolve_scenario(name))

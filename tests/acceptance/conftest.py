@@ -19,11 +19,11 @@ from modbus_bridge.loop import RunResult
 from modbus_bridge.regmap import APP_DIR, RegisterMapError
 from modbus_bridge.runner import HarnessSetup, run_variants
 from modbus_bridge.scenario import Scenario
+from tests.slow_cases import SLOW_ENV, slow_enabled
 
 PLC_ENV = "THERMOST_PLC"
 STATE_ERROR = ControllerCodes.load().states["ERROR"]
 SPEED_ENV = "THERMOST_PLC_SPEED"
-SLOW_ENV = "THERMOST_SLOW"
 
 
 def pytest_collection_modifyitems(items):
@@ -52,7 +52,7 @@ def harness() -> HarnessSetup:
 def skip_known_shortfall(label: str, why: str) -> None:
     """A goal not met yet: skipped in CI with the reason; with THERMOST_SLOW=1 the test runs, marked by its
     file as a strict expected failure."""
-    if not os.environ.get(SLOW_ENV):
+    if not slow_enabled():
         pytest.skip(f"known shortfall, {label}: {why} ({SLOW_ENV}=1 runs it as an expected failure)")
 
 

@@ -17,8 +17,9 @@ import pytest
 
 from modbus_bridge.faults import run_fault
 from modbus_bridge.regmap import load_register_map
+from tests.slow_cases import skip_unless_slow
 
-from .conftest import PLC_ENV, SLOW_ENV, skip_known_shortfall
+from .conftest import PLC_ENV, skip_known_shortfall
 
 GOAL_AFTER_DEAD_TIME_S = 5.0
 FROZEN_GOAL_S = 30.0
@@ -93,14 +94,13 @@ def check(harness, plant: str, fault: str, settle_s: float = 120.0):
 @pytest.mark.parametrize(("plant", "fault"), list(cases()))
 def test_fault_is_detected_and_the_heater_goes_off(harness, plant, fault):
     shortfall(plant, fault)
-    if (plant, fault) not in QUICK and not os.environ.get(SLOW_ENV):
-        pytest.skip(f"{plant} {fault}: extra closed-loop run (CI time); set {SLOW_ENV}=1")
+    if (plant, fault) not in QUICK:
+        skip_unless_slow(f"{plant} {fault}")
     check(harness, plant, fault)
 
 
 @pytest.mark.parametrize("fault", ["heater_weak", "sensor_falling_off"])
 def test_partial_faults_on_seed003(harness, fault):
     shortfall("seed003_hotend_fuzzy", fault)
-    if not os.environ.get(SLOW_ENV):
-        pytest.skip(f"weak heater / sensor falling off: extra runs; set {SLOW_ENV}=1")
+    skip_unless_slow("weak heater / sensor falling off")
     check(harness, "seed003_hotend_fuzzy", fault)

@@ -10,17 +10,16 @@ tests (test_lib_heatup.py). CI runs QUICK; THERMOST_SLOW=1 runs every case."""
 from __future__ import annotations
 
 import dataclasses
-import os
 
 import pytest
 
 from modbus_bridge.optimise.robustness import plant_model, scored_step
 from modbus_bridge.plants.response import PlantModel
 from modbus_bridge.scenario import Disturbance, Scenario, load_scenario, resolve_scenario
+from tests.slow_cases import skip_unless_slow
 
 from .heatup_step import model_based_step
 
-SLOW_ENV = "THERMOST_SLOW"
 SCENARIOS = ("seed000_forming_platform", "t1_rrf_hotend", "t4_tclab", "t6_nonlinear_hotend")
 SCALES = (0.7, 1.3)
 MISMATCH_OVERSHOOT_PCT, MISMATCH_BOUND_RATIO = 2.0, 1.5
@@ -59,8 +58,8 @@ def changed(sc: Scenario, kind: str, scale: float) -> tuple[Scenario, PlantModel
 
 @pytest.mark.parametrize(("name", "kind", "scale"), list(cases()))
 def test_the_model_based_step_meets_the_mismatch_goals(harness, name, kind, scale):
-    if (name, kind, scale) not in QUICK and not os.environ.get(SLOW_ENV):
-        pytest.skip(f"{name} {kind} x{scale}: extra closed-loop run (CI time); set {SLOW_ENV}=1")
+    if (name, kind, scale) not in QUICK:
+        skip_unless_slow(f"{name} {kind} x{scale}")
     sc, pm = changed(load_scenario(resolve_scenario(name)), kind, scale)
     step = model_based_step(harness, sc, f"{name} {kind} x{scale}", true_plant=pm)
     assert step.overshoot_pct <= MISMATCH_OVERSHOOT_PCT

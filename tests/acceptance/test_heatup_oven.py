@@ -12,12 +12,12 @@ CI runs the longer lags (QUICK); THERMOST_SLOW=1 runs both."""
 from __future__ import annotations
 
 import dataclasses
-import os
 
 import pytest
 
 from modbus_bridge.plants.response import PlantModel, bang_hold_bound
 from modbus_bridge.scenario import Disturbance, load_scenario, resolve_scenario
+from tests.slow_cases import skip_unless_slow
 
 from .conftest import run_scenario
 
@@ -29,7 +29,6 @@ PID_ALONE_SLOWER = 2.0  # the PID alone's 2 % settling time over the model-based
 HAND_OVER_SHARE = 0.5  # of the PID alone's peak past W after TUNE
 LAGS_AFTER_TUNE = (0.7, 1.3)  # the oven's lags after TUNE, times what TUNE saw
 QUICK = (1.3,)
-SLOW_ENV = "THERMOST_SLOW"
 SEEN_LAGS_TOLERANCE = 0.1  # the lags the response reports, share of the true ones
 MISMATCH_BOUND_RATIO, MISMATCH_OVERSHOOT_PCT = 1.5, 2.0
 
@@ -83,8 +82,8 @@ def test_the_oven_lands_on_its_identified_n_lag_model(harness):
 
 @pytest.mark.parametrize("lags", LAGS_AFTER_TUNE)
 def test_an_oven_with_other_lags_than_its_model_lands_without_an_alarm(harness, lags: float):
-    if lags not in QUICK and not os.environ.get(SLOW_ENV):
-        pytest.skip(f"oven lags x{lags}: extra closed-loop run (CI time); set {SLOW_ENV}=1")
+    if lags not in QUICK:
+        skip_unless_slow(f"oven lags x{lags}")
     sc, phases = _tune_settle_step(lags_after_tune=lags)
     sc = dataclasses.replace(sc, variants=[v for v in sc.variants if v.name == MODEL_BASED])
     [(result, metrics)] = run_scenario(harness, sc)

@@ -13,10 +13,10 @@ import pytest
 
 from modbus_bridge.alarms import describe
 from modbus_bridge.faults import run_mismatch
+from tests.slow_cases import skip_unless_slow
 
 from .conftest import PLC_ENV, STATE_ERROR, alarm_word
 
-SLOW_ENV = "THERMOST_SLOW"
 PLANTS = ("seed003_hotend_fuzzy", "t1_rrf_hotend")
 SCALES = ((0.7, 0.7), (1.3, 1.3), (0.7, 1.3), (1.3, 0.7))
 QUICK = {("seed003_hotend_fuzzy", (0.7, 0.7)), ("t1_rrf_hotend", (1.3, 1.3))}
@@ -47,8 +47,8 @@ def cases():
 
 @pytest.mark.parametrize(("plant", "scale"), list(cases()))
 def test_model_mismatch_raises_no_alarm(harness, plant, scale):
-    if (plant, scale) not in QUICK and not os.environ.get(SLOW_ENV):
-        pytest.skip(f"{plant} T x{scale[0]} L x{scale[1]}: extra closed-loop run (CI time); set {SLOW_ENV}=1")
+    if (plant, scale) not in QUICK:
+        skip_unless_slow(f"{plant} T x{scale[0]} L x{scale[1]}")
     run = asyncio.run(run_mismatch(plant, scale[0], scale[1], harness, plc=os.environ.get(PLC_ENV)))
     assert run.tuned, f"{plant}: the zone did not tune"
     assert run.t and run.t[-1] >= run.t_fault + 700.0, f"{plant}: the programme did not run to its end"

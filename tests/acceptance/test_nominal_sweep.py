@@ -5,11 +5,11 @@ every shipped scenario and variant."""
 from __future__ import annotations
 
 import dataclasses
-import os
 
 import pytest
 
 from modbus_bridge.scenario import load_scenario, resolve_scenario, shipped_scenarios
+from tests.slow_cases import skip_unless_slow, slow_enabled
 
 from .conftest import assert_no_alarm, run_scenario, skip_known_shortfall
 
@@ -34,10 +34,10 @@ def cases():
 def test_nominal_scenario_raises_no_alarm(harness, name):
     if name in SHORTFALLS:
         skip_known_shortfall(name, SHORTFALLS[name])
-    if name not in QUICK and not os.environ.get("THERMOST_SLOW"):
-        pytest.skip(f"{name}: full nominal sweep with THERMOST_SLOW=1 (CI time)")
+    if name not in QUICK:
+        skip_unless_slow(f"{name}: full nominal sweep")
     sc = load_scenario(resolve_scenario(name))
-    if QUICK.get(name) and not os.environ.get("THERMOST_SLOW"):
+    if QUICK.get(name) and not slow_enabled():
         sc = dataclasses.replace(sc, variants=[v for v in sc.variants if v.name == QUICK[name]])
     assert sc.variants, f"{name}: no variant to run"
     runs = run_scenario(harness, sc)

@@ -35,6 +35,7 @@ import pytest
 from modbus_bridge.plants.base import PlantDisturbance
 from modbus_bridge.plants.lti import TransferFunctionPlant
 from modbus_bridge.plants.response import PlantModel, bang_hold_bound
+from tests.slow_cases import skip_unless_slow
 from tests.test_lib_heatup import controller, step_from_rest
 from tests.test_lib_tuner import RULE_AMIGO, rule_values, two_lags_two_point
 
@@ -130,7 +131,9 @@ def test_two_lags_unlike_their_model_stay_within_the_mismatch_goals(mismatch: di
 def test_a_faster_rise_stays_within_the_mismatch_goals_over_noise_draws(label: str) -> None:
     """The lags read from a faster rise scatter with the noise (the level's error reaches the slow lag through
     the fast one); planned on the shortest slow lag within a standard error, every draw lands within the
-    mismatch goals, where the lags as read carried 5 of 14 draws past 2 %."""
+    mismatch goals, where the lags as read carried 5 of 14 draws past 2 %. CI runs MISMATCH_SEED's draw in
+    the mismatch test above."""
+    skip_unless_slow(f"{label} over noise draws")
     runs = [step(**FASTER_RISES[label], seed=seed) for seed in NOMINAL_SEEDS]
     figures = ", ".join(f"{r.settling_s / r.bound_s:.2f} x / {r.overshoot_pct:.2f} %" for r in runs)
     print(f"{label}, noise draws {NOMINAL_SEEDS.start}-{NOMINAL_SEEDS.stop - 1}: {figures}")
@@ -171,7 +174,8 @@ def test_a_plant_ahead_of_the_path_gets_its_integral_before_it_passes_w() -> Non
     2.54 % with the lag as read); planned on the shortest slow lag the rise allows, the path runs ahead of
     the plant for longer, so that share is small now (a mean of 3.14 % without it, 3.00 % with it), but the
     overshoot no longer depends on how long the noise made the lag read. It still misses the mismatch goal
-    (the expected failure above)."""
+    (the expected failure above), which is the one draw CI runs."""
+    skip_unless_slow("gain x1.2 over noise draws")
     runs = [step(gain=1.2, seed=seed) for seed in NOMINAL_SEEDS]
     overshoots = [r.overshoot_pct for r in runs]
     print(f"gain x1.2, noise draws {NOMINAL_SEEDS.start}-{NOMINAL_SEEDS.stop - 1}: overshoot "

@@ -26,7 +26,7 @@ SECTION = "## Acceptance suite"
 # a figure with its unit; the unit-less numbers of a row (bit numbers, seeds) are not goals
 FIGURE = re.compile(r"(?<![\w.,])(\d{1,3}(?:,\d{3})+|\d+(?:\.\d+)?)\s?(×|%|s\b|°C)?")
 METRIC_TERMS = ("2 % settling", "2 % band")  # the metric's name, not a goal (metrics.py)
-COUNT_WORDS = {2: "two", 3: "three"}
+COUNT_WORDS = {2: "two", 3: "three", 8: "eight"}
 FACTOR_WORDS = {0.5: "half", 2.0: "twice"}
 
 
@@ -104,7 +104,8 @@ def goals() -> dict[str, Callable[[ModuleType], list[str]]]:
             step_of("seed000_forming_platform"), ratio(m.BOUND_RATIO), pct(m.OVERSHOOT_PCT)],
         "test_heatup_tclab.py": lambda m: [
             step_of("t4_tclab"), ratio(m.BOUND_RATIO), pct(m.MISMATCH_OVERSHOOT_PCT),
-            pct(m.NOMINAL_OVERSHOOT_PCT)],
+            pct(m.NOMINAL_OVERSHOOT_PCT), pct(_zone1_write("t4_tclab", "fEndTunePercentZone1")),
+            f"{COUNT_WORDS[len(m.DRAWS)]} other noise draws"],
         "test_heatup_mismatch.py": lambda m: [
             *{change(s) for s in m.SCALES}, pct(m.MISMATCH_OVERSHOOT_PCT), ratio(m.MISMATCH_BOUND_RATIO)],
         "test_shared_body.py": lambda m: [],
@@ -122,6 +123,12 @@ def goals() -> dict[str, Callable[[ModuleType], list[str]]]:
 
 def goals_of(name: str) -> list[str]:
     return GOALS[name](module(name))
+
+
+def _zone1_write(name: str, register: str) -> float:
+    values = [float(p.writes[register]) for p in scenario(name).zones[0].phases if register in p.writes]
+    assert len(values) == 1, f"{name}: expected one write of {register} in zone 1, found {values}"
+    return values[0]
 
 
 def _dead_time_scale(name: str) -> float:

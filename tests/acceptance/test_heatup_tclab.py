@@ -3,43 +3,48 @@ PID"): two heaters on one board, zone 1 tuned while zone 2 is idle, then stepped
 holds its own setpoint. TUNE fits two unequal lags to a plant of three coupled states, so the model the
 plan starts from is not the plant the step meets; the rise's line re-plans on the lags it shows. Goals on
 the true temperature: 2 % settling within 1.05x the bang-hold bound of the true plant (one switch, which
-overshoots about 2 % to enter the band early), overshoot <= 2 % (the mismatch goal) and <= 0.5 % (the
-nominal goal, not met yet: SHORTFALLS). The rise reads a slow lag longer than the model's, and a slower
-rise is planned between the two (a slower sensor wants the lag read, a weaker heater the model's): on this
-board the pulse then carries the plant past W. The 0.5 % was met while the PID's integrator started the
-path about 2 % below the holding power, the tuned filter's lag on the rising X read as X behind the path;
-that offset also left other noise draws below W for minutes (docs/library.md)."""
+overshoots about 2 % to enter the band early) with overshoot <= 0.5 %.
+The step holds at the power TUNE's gain gives, so its overshoot follows the error in Ks. The scenario ends
+zone 1's TUNE at 95 % of the way to its setpoint: cut at the default 80 %, the record held about half of
+the tune step's rise, where the slow lag shows Ks only through Ks/Tg, and over noise draws Ks came out 9 %
+low to 22 % high (the step overshot up to 2.42 %, or crept in for up to 2.3x the bound). Over DRAWS
+(THERMOST_SLOW=1) the mean overshoot is held to the nominal goal and every draw to the mismatch overshoot."""
 
 from __future__ import annotations
 
+import dataclasses
+
+import numpy as np
 import pytest
 
 from modbus_bridge.scenario import load_scenario, resolve_scenario
+from tests.slow_cases import skip_unless_slow
 
-from .conftest import skip_known_shortfall
 from .heatup_step import ScoredStep, model_based_step
 
 SCENARIO = "t4_tclab"
 BOUND_RATIO, MISMATCH_OVERSHOOT_PCT, NOMINAL_OVERSHOOT_PCT = 1.05, 2.0, 0.5
-# goals not met yet: skipped in CI with the reason, strict expected failures with THERMOST_SLOW=1
-SHORTFALLS = {
-    "nominal overshoot": "the rise reads a slow lag 18 % longer than the model's and the plan between the "
-    "two carries the true temperature 1.24 % past W",
-}
+DRAWS = range(1, 9)  # noise draws other than the scenario's own
 
 
 @pytest.fixture(scope="module")
 def tclab_step(harness) -> ScoredStep:
-    """One run for both tests."""
     return model_based_step(harness, load_scenario(resolve_scenario(SCENARIO)), SCENARIO)
 
 
-def test_the_tclab_step_enters_the_band_with_the_bound_and_within_the_mismatch_overshoot(tclab_step):
+def test_the_tclab_step_enters_the_band_with_the_bound_and_within_the_nominal_overshoot(tclab_step):
     assert tclab_step.settling_s <= BOUND_RATIO * tclab_step.bound_s
-    assert tclab_step.overshoot_pct <= MISMATCH_OVERSHOOT_PCT
-
-
-@pytest.mark.xfail(reason=f"known shortfall: {SHORTFALLS['nominal overshoot']}", strict=True)
-def test_the_tclab_step_meets_the_nominal_overshoot(tclab_step):
-    skip_known_shortfall(f"{SCENARIO} nominal overshoot", SHORTFALLS["nominal overshoot"])
     assert tclab_step.overshoot_pct <= NOMINAL_OVERSHOOT_PCT
+
+
+def test_over_noise_draws_the_mean_overshoot_meets_the_nominal_goal(harness):
+    skip_unless_slow(f"{SCENARIO} over noise draws {DRAWS.start}-{DRAWS.stop - 1}")
+    sc = load_scenario(resolve_scenario(SCENARIO))
+    steps = [model_based_step(harness, dataclasses.replace(sc, seed=seed), f"{SCENARIO} noise draw {seed}")
+             for seed in DRAWS]
+    overshoots, ratios = [s.overshoot_pct for s in steps], [s.ratio for s in steps]
+    print(f"{SCENARIO}, noise draws {DRAWS.start}-{DRAWS.stop - 1}: overshoot "
+          f"{', '.join(f'{o:.2f}' for o in overshoots)} % (mean {np.mean(overshoots):.2f} %), settling "
+          f"{', '.join(f'{r:.2f}' for r in ratios)} x the bound (median {np.median(ratios):.2f} x)")
+    assert float(np.mean(overshoots)) <= NOMINAL_OVERSHOOT_PCT
+    assert max(overshoots) <= MISMATCH_OVERSHOOT_PCT

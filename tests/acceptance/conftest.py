@@ -19,7 +19,6 @@ from modbus_bridge.loop import RunResult
 from modbus_bridge.regmap import APP_DIR, RegisterMapError
 from modbus_bridge.runner import HarnessSetup, run_variants
 from modbus_bridge.scenario import Scenario
-from tests.slow_cases import SLOW_ENV, slow_enabled
 
 PLC_ENV = "THERMOST_PLC"
 STATE_ERROR = ControllerCodes.load().states["ERROR"]
@@ -47,13 +46,6 @@ def harness() -> HarnessSetup:
         except ImportError as exc:
             pytest.skip(f"the embedded soft-PLC is missing ({exc}) and {PLC_ENV} is not set")
     return setup
-
-
-def skip_known_shortfall(label: str, why: str) -> None:
-    """A goal not met yet: skipped in CI with the reason; with THERMOST_SLOW=1 the test runs, marked by its
-    file as a strict expected failure."""
-    if not slow_enabled():
-        pytest.skip(f"known shortfall, {label}: {why} ({SLOW_ENV}=1 runs it as an expected failure)")
 
 
 def run_scenario(setup: HarnessSetup, scenario: Scenario):

@@ -17,9 +17,9 @@ import pytest
 
 from modbus_bridge.faults import run_fault
 from modbus_bridge.regmap import load_register_map
-from tests.slow_cases import skip_unless_slow
+from tests.slow_cases import skip_known_shortfall, skip_unless_slow
 
-from .conftest import PLC_ENV, skip_known_shortfall
+from .conftest import PLC_ENV
 
 GOAL_AFTER_DEAD_TIME_S = 5.0
 FROZEN_GOAL_S = 30.0

@@ -9,9 +9,9 @@ import dataclasses
 import pytest
 
 from modbus_bridge.scenario import load_scenario, resolve_scenario, shipped_scenarios
-from tests.slow_cases import skip_unless_slow, slow_enabled
+from tests.slow_cases import skip_known_shortfall, skip_unless_slow, slow_enabled
 
-from .conftest import assert_no_alarm, run_scenario, skip_known_shortfall
+from .conftest import assert_no_alarm, run_scenario
 
 QUICK = {"seed003_hotend_fuzzy": "PID (self-tuned)", "t3_marlin_hotend": None}
 NOT_NOMINAL = ("seed003_sensor_fault",)  # the fault-injection scenario

@@ -37,3 +37,33 @@ def tuning_study() -> str:
     lines += ["", f"Goals met on {met} of {len(rows)} plants; worst Ms on the true plant "
               f"{max(r.ms for r in rows):.2f}."]
     return "\n".join(lines) + "\n"
+
+
+@producer("heatup-oven-band")
+def heatup_oven_band() -> str:
+    """The oven's model-based step over its grid of lags and gains, as tests/test_lib_heatup_oven_band.py
+    holds it (the same cases, computed once per process: about a minute of CPU)."""
+    tests_on_path()
+    from tests.test_lib_heatup import MISMATCH_BOUND_RATIO, MISMATCH_OVERSHOOT_PCT
+    from tests.test_lib_heatup_oven_band import GAINS, LAGS, SHORTFALLS, band_case, meets_goals
+
+    lines = [
+        f"Settling (2 %) over that plant's bang-hold bound / overshoot, the oven's step 100 → 150 °C "
+        f"planned on its model; bold: outside the mismatch goals ({MISMATCH_OVERSHOOT_PCT:g} % within "
+        f"{MISMATCH_BOUND_RATIO:g} × the bound), an expected failure of "
+        f"`tests/test_lib_heatup_oven_band.py`:",
+        "",
+        "| lags \\ gain | " + " | ".join(f"× {g:g}" for g in GAINS) + " |",
+        "|---|" + "---|" * len(GAINS),
+    ]
+    for lags in LAGS:
+        cells = []
+        for gain in GAINS:
+            settling, overshoot, bound = band_case(lags, gain)
+            cell = f"{settling / bound:.2f} × / {overshoot:.2f} %"
+            cells.append(cell if meets_goals(lags, gain) else f"**{cell}**")
+        lines.append(f"| × {lags:g} | " + " | ".join(cells) + " |")
+    met = sum(meets_goals(lags, gain) for lags in LAGS for gain in GAINS)
+    lines += ["", f"Within the goals on {met} of {len(LAGS) * len(GAINS)} plants; "
+              f"{len(SHORTFALLS)} named as known shortfalls."]
+    return "\n".join(lines) + "\n"

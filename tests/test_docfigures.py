@@ -29,6 +29,7 @@ def test_every_block_has_a_producer():
 CHECKED_BESIDE_THEIR_TESTS = {
     "tuning-study": "tests/test_lib_tuning_study.py",
     "fuzzy-oracle": "tests/test_fuzzy_inference.py",
+    "heatup-oven-band": "tests/test_lib_heatup_oven_band.py",
 }
 
 

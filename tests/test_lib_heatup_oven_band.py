@@ -1,45 +1,77 @@
-"""The oven's model-based step (four equal lags, 100 -> 150 degC, test_lib_heatup's oven) over a band of
-plants unlike its model, not only at the band's ends: lags 0.7 .. 1.3 times the model's and a gain 0.8 ..
-1.2 times it, one at a time and at the corners. Every case keeps the mismatch goals (2 % overshoot within
-1.5x that plant's bang-hold bound) except a plant both faster and stronger than its model: its rise shows
-the plant only after a pulse planned on the model has ended, and the second plan's brake, made where the rise
-passes its second point, can then either keep the peak or avoid the dip, not both (it balances them).
-Those cases run as strict expected failures with THERMOST_SLOW=1, so a plan that lands them shows; CI runs
-the rest of the band (about 15 s of scans on one worker)."""
+"""The oven's model-based step (four equal lags, 100 -> 150 degC, test_lib_heatup's oven) over a grid of
+plants unlike its model, not only at the ends test_lib_heatup holds: lags 0.7 .. 1.3 times the model's and a
+gain 0.8 .. 1.2 times it, every combination. The mismatch goals are 2 % overshoot within 1.5x that plant's
+bang-hold bound. The cases that miss them run as strict expected failures, so a plan that lands them shows;
+docs/library.md shows the grid (figures:heatup-oven-band, checked here against the results of this process).
+
+Two causes, seen in the second plan's fit (FC_HeatUpNLagFit, printed by a debug run of the scan):
+- a gain 10 % off the model's, with the lags off too, is read within fGainKeep of 1 and kept as the model's,
+  so the plan holds at the model's power, 10 % off the plant's: the PID's integral takes that away only
+  slowly. That band is there because a delay 30 % off reads as up to 7 % of gain; at fGainKeep 0.05 these
+  cases pass, and the delay cases miss the goals instead;
+- a plant both faster and stronger: its rise shows it only after the pulse planned on the model has ended,
+  and at the second point the chain already holds more heat than W needs even with the heater off."""
 
 from __future__ import annotations
 
+import functools
+
 import pytest
 
-from tests.slow_cases import skip_known_shortfall
+from modbus_bridge import docfigures
 from tests.test_lib_heatup import MISMATCH_BOUND_RATIO, MISMATCH_OVERSHOOT_PCT, OVEN_N, oven_bound, oven_step
 
-BAND = [(0.75, 1.0), (0.8, 1.0), (0.9, 1.0), (1.1, 1.0), (1.0, 0.9), (1.0, 1.1), (1.0, 1.15),
-        (0.7, 0.8), (0.8, 0.8), (1.3, 0.8), (1.2, 1.2), (1.3, 1.2)]  # (lags, gain) times the model's
-FASTER_AND_STRONGER = {
-    (0.7, 1.2): "brake balanced at about +10 % peak and -10 % dip",
-    (0.8, 1.2): "about 4 % overshoot, 1.9x",
-    (0.8, 1.1): "about 7 % overshoot, 1.7x",
-    (0.9, 1.2): "within 2 % but about 1.9x the bound",
+LAGS = (0.7, 0.8, 0.9, 1.0, 1.1, 1.3)  # times the model's
+GAINS = (0.8, 0.9, 1.0, 1.1, 1.2)
+GAIN_KEPT = "a gain 10 % off read as the model's: held at the model's power"
+FASTER_AND_STRONGER = "faster and stronger: the chain holds too much heat by the second point"
+SHORTFALLS = {
+    (0.7, 0.9): GAIN_KEPT,
+    (0.7, 1.1): FASTER_AND_STRONGER,
+    (0.7, 1.2): FASTER_AND_STRONGER,
+    (0.8, 1.1): GAIN_KEPT,
+    (0.8, 1.2): FASTER_AND_STRONGER,
+    (0.9, 1.1): GAIN_KEPT,
+    (0.9, 1.2): FASTER_AND_STRONGER,
+    (1.1, 0.9): GAIN_KEPT,
+    (1.1, 1.1): GAIN_KEPT,
+    (1.3, 0.9): GAIN_KEPT,
 }
 
 
+@functools.cache
+def band_case(lags: float, gain: float) -> tuple[float, float, float]:
+    """(2 % settling s, overshoot %, bound s) of the oven's step with its lags and gain this far off."""
+    res = oven_step(order=OVEN_N, t_scale=lags, k_scale=gain)
+    return res.settling_s, res.overshoot_pct, oven_bound(lags, gain)
+
+
+def meets_goals(lags: float, gain: float) -> bool:
+    settling, overshoot, bound = band_case(lags, gain)
+    return overshoot <= MISMATCH_OVERSHOOT_PCT and settling <= MISMATCH_BOUND_RATIO * bound
+
+
 def _cases():
-    for lags, gain in BAND:
-        yield pytest.param(lags, gain, None, id=f"lags_x{lags}-gain_x{gain}")
-    for (lags, gain), why in FASTER_AND_STRONGER.items():
-        mark = pytest.mark.xfail(reason=f"known shortfall: {why}", strict=True)
-        yield pytest.param(lags, gain, why, marks=[mark], id=f"lags_x{lags}-gain_x{gain}")
+    for lags in LAGS:
+        for gain in GAINS:
+            why = SHORTFALLS.get((lags, gain))
+            marks = [pytest.mark.xfail(reason=f"known shortfall: {why}", strict=True)] if why else []
+            yield pytest.param(lags, gain, marks=marks, id=f"lags_x{lags}-gain_x{gain}")
 
 
-@pytest.mark.parametrize(("lags", "gain", "shortfall"), list(_cases()))
-def test_the_oven_step_keeps_the_mismatch_goals_across_the_band(lags: float, gain: float,
-                                                                shortfall: str | None) -> None:
-    label = f"oven lags x{lags}, gain x{gain}"
-    if shortfall:
-        skip_known_shortfall(label, shortfall)
-    res, bound = oven_step(order=OVEN_N, t_scale=lags, k_scale=gain), oven_bound(lags, gain)
-    print(f"{label}: {res.settling_s:.1f} s (bound {bound:.1f} s, {res.settling_s / bound:.2f}x), "
-          f"{res.overshoot_pct:.2f} %")
-    assert res.overshoot_pct <= MISMATCH_OVERSHOOT_PCT
-    assert res.settling_s <= MISMATCH_BOUND_RATIO * bound
+@pytest.mark.parametrize(("lags", "gain"), list(_cases()))
+def test_the_oven_step_keeps_the_mismatch_goals_across_the_grid(lags: float, gain: float) -> None:
+    settling, overshoot, bound = band_case(lags, gain)
+    print(f"oven lags x{lags}, gain x{gain}: {settling:.1f} s (bound {bound:.1f} s, "
+          f"{settling / bound:.2f}x), {overshoot:.2f} %")
+    assert overshoot <= MISMATCH_OVERSHOOT_PCT
+    assert settling <= MISMATCH_BOUND_RATIO * bound
+
+
+def test_the_docs_show_this_grid() -> None:
+    """docs/library.md's grid, from the cases this process computed."""
+    text = (docfigures.DOCS / "library.md").read_text(encoding="utf-8")
+    assert "<!-- figures:heatup-oven-band -->" in text
+    assert docfigures.render(text, {"heatup-oven-band"}) == text, (
+        "docs/library.md: figures:heatup-oven-band disagrees with the code: run `make docs`"
+    )

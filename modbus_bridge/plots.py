@@ -43,7 +43,7 @@ def gain_lines(tr: ZoneTrace) -> list[list[tuple[str, str]]]:
     return axes
 
 
-def _pyplot():
+def pyplot():
     import matplotlib
 
     matplotlib.use("Agg")
@@ -103,7 +103,7 @@ def _temperature_limits(ax, traces: list[ZoneTrace]) -> None:
 
 def write_plot(result: RunResult, path: Path) -> None:
     """One variant: temperature, output, Kp, Tn/Tv per zone (columns)."""
-    plt = _pyplot()
+    plt = pyplot()
     n = len(result.zones)
     fig, axes = plt.subplots(4, n, figsize=(8 * n, 10), sharex="col", squeeze=False,
                              gridspec_kw={"height_ratios": [3, 1.5, 1, 1]})
@@ -138,7 +138,7 @@ def write_compare(results: list[RunResult], path: Path) -> bool:
     drawn = [r for r in results if any(tr.t for tr in r.zones)]
     if not drawn:
         return False
-    plt = _pyplot()
+    plt = pyplot()
     names = [tr.name for tr in drawn[0].zones]
     fig, axes = plt.subplots(2, len(names), figsize=(10 * len(names), 7), sharex="col", squeeze=False,
                              gridspec_kw={"height_ratios": [3, 1.3]})

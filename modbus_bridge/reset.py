@@ -54,7 +54,7 @@ class FactoryState:
         in its factory state shows too (e.g. a start temperature outside a zone's factory limits)."""
         from plc.runtime.server import load_program
 
-        app = load_program(self.program, "<reference copy>")
+        app = load_program(self.program)
         located = {v.name: v for v in app.located}
         for _ in range(RESET_SCANS):
             app.scan()
@@ -68,7 +68,7 @@ class FactoryState:
     def of_program(text: str, regmap: RegisterMap, scans: int = RESET_SCANS) -> FactoryState:
         from plc.runtime.server import load_program
 
-        app = load_program(text, "<reference copy>")
+        app = load_program(text)
         for _ in range(scans):
             app.scan()
         state = FactoryState(program=text)

@@ -130,8 +130,12 @@ def run_variants_parallel(
             lambda stop: run_variants(scenario, setup, progress_for=progress_for,
                                       max_plant_time_s=max_plant_time_s, should_stop=stop)
         )
-    setup.program_text()  # bundle once, before forking
+    setup.program_text()  # bundle and compile once, before forking
     setup.factory_state()
+    if plot_dir is not None:  # the workers draw their plots and the parent the comparison: import it once
+        from .plots import pyplot
+
+        pyplot()
     ctx = mp.get_context("fork")
     queue = ctx.Queue()
     stop_event = ctx.Event()

@@ -52,6 +52,27 @@ def test_features_program_runs_scan_by_scan():
     assert app.time_ns == 200_000_000
 
 
+def test_loading_the_same_sources_again_compiles_once_and_shares_no_state(monkeypatch):
+    import plc.st.compiler as compiler
+
+    compiles = []
+    original = compiler.compile_to_python
+    monkeypatch.setattr(compiler, "compile_to_python", lambda src: compiles.append(src) or original(src))
+    compiler._compiled.cache_clear()
+    first, second = _load("softplc_features.st"), _load("softplc_features.st")
+    assert len(compiles) == 1
+    for _ in range(3):
+        first.scan()
+    assert first.get("inst0.sP.n") == 9
+    assert second.get("inst0.sP.n") == 0 and second.time_ns == 0  # its own instances, globals and clock
+    second.scan()
+    assert second.get("inst0.sP.n") == 3
+    assert [v.location for v in first.located] == [v.location for v in second.located]
+    assert {v.name: v.get() for v in second.located} != {v.name: v.get() for v in first.located}
+    _prog("x := x + 1;", "x : INT;")
+    assert len(compiles) == 2  # other sources compile on their own
+
+
 def test_array_index_fault_stops_program_not_process():
     app = _load("softplc_features.st")
     for _ in range(5):

@@ -32,8 +32,6 @@ class Application:
         intervals: dict[str, int],
         located: list[LocatedVar],
         globals_obj,
-        pou_types: dict,
-        global_vars: dict,
         code: str,
     ):
         self.clock = clock
@@ -41,8 +39,6 @@ class Application:
         self.located = located
         self.globals = globals_obj
         self.code = code
-        self._pou_types = pou_types
-        self._global_vars = global_vars
         known = [iv for iv in intervals.values() if iv > 0]
         self.interval_ns = math.gcd(*known) if known else 10_000_000
         # each instance runs every `ratio` ticks (OpenPLC: tasks at multiples of the common tick)

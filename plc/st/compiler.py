@@ -13,7 +13,10 @@ The generated module's scan calls the program instances' `_run()` methods.
 
 from __future__ import annotations
 
+import functools
 import re
+from dataclasses import dataclass
+from types import CodeType
 
 from plc.st import rt, stdfbs
 from plc.st.app import Application, LocatedVar
@@ -112,22 +115,67 @@ def compile_to_python(sources: list[tuple[str, str]]) -> tuple[str, Compiler, li
     return code, comp, instances
 
 
+# distinct applications a process keeps compiled: the bundle, a controller test program, a few more
+COMPILED_KEPT = 8
+LOCATION = re.compile(r"%([IQM])([XBWDL])?(\d+)(?:\.(\d+))?")
+
+
+@dataclass(frozen=True)
+class _LocatedDecl:
+    """A located variable as declared: in a program instance (`instance`) or the CONFIGURATION ("")."""
+
+    instance: str
+    name: str  # lower-case, the attribute is v_<name>
+    decl_name: str
+    location: str
+    type: Type
+
+
+@dataclass(frozen=True)
+class _Compiled:
+    """What loading needs of a compilation (not its parse trees): loading it again costs one module run."""
+
+    code: str
+    module: CodeType
+    instances: Instances
+    located: tuple[_LocatedDecl, ...]
+
+
+def _located_decls(comp: Compiler, instances: Instances) -> tuple[_LocatedDecl, ...]:
+    owners: list[tuple[str, dict[str, Var]]] = [("", comp.globals)]
+    owners += [(inst, comp.pous[cls.split("_", 1)[1]].vars) for inst, cls, _ in instances]
+    return tuple(
+        _LocatedDecl(inst, name, v.decl_name or name, v.location, v.type)
+        for inst, table in owners
+        for name, v in table.items()
+        if v.location and LOCATION.fullmatch(v.location)
+    )
+
+
+@functools.lru_cache(maxsize=COMPILED_KEPT)
+def _compiled(sources: tuple[tuple[str, str], ...]) -> _Compiled:
+    code, comp, instances = compile_to_python(list(sources))
+    module = compile(code, "<thermost-st>", "exec")
+    return _Compiled(code, module, instances, _located_decls(comp, instances))
+
+
 def load_application(sources: list[tuple[str, str]]) -> Application:
-    code, comp, instances = compile_to_python(sources)
+    """A fresh application (its own instances, clock and located variables) of these sources. The same
+    sources are compiled once per process (a forked process inherits what its parent compiled)."""
+    comp = _compiled(tuple((name, text) for name, text in sources))
     ns = _namespace()
     clk = stdfbs.Clock()
     ns["CLK"] = clk
     try:
-        exec(compile(code, "<thermost-st>", "exec"), ns)  # noqa: S102 - our own generated code
+        exec(comp.module, ns)  # noqa: S102 - our own generated code
         G = ns["Globals"]()
         ns["G"] = G
-        programs = {inst: ns[cls]() for inst, cls, _ in instances}
+        programs = {inst: ns[cls]() for inst, cls, _ in comp.instances}
     except rt.PlcRuntimeError as exc:
         raise StError([Diagnostic(sources[0][0], 1, 1, f"initialisation fault: {exc}")]) from None
-    intervals = {inst: iv for inst, _, iv in instances}
-    located = _located_vars(comp, programs, G)
-    types = {inst: comp.pous[cls.split("_", 1)[1]] for inst, cls, _ in instances}
-    return Application(clk, programs, intervals, located, G, types, comp.globals, code)
+    intervals = {inst: iv for inst, _, iv in comp.instances}
+    located = [_located_var(d, programs[d.instance] if d.instance else G) for d in comp.located]
+    return Application(clk, programs, intervals, located, G, comp.code)
 
 
 def _setter(obj, attr: str, t: Type):
@@ -143,33 +191,20 @@ def _setter(obj, attr: str, t: Type):
     return lambda v: setattr(obj, attr, int(v))
 
 
-def _located_vars(comp: Compiler, programs: dict, G) -> list[LocatedVar]:
-    out: list[LocatedVar] = []
-    owners: list[tuple[str, object, dict[str, Var]]] = [("", G, comp.globals)]
-    for inst, obj in programs.items():
-        pou = comp.pous[type(obj).__name__.split("_", 1)[1]]
-        owners.append((inst, obj, pou.vars))
-    for inst, obj, table in owners:
-        for name, v in table.items():
-            if not v.location:
-                continue
-            m = re.fullmatch(r"%([IQM])([XBWDL])?(\d+)(?:\.(\d+))?", v.location)
-            if m is None:
-                continue
-            area, size, index, bit = m.group(1), m.group(2) or "X", int(m.group(3)), m.group(4)
-            attr = f"v_{name}"
-            out.append(
-                LocatedVar(
-                    name=v.decl_name or name,
-                    instance=inst,
-                    location=v.location,
-                    area=area,
-                    size=size,
-                    index=index,
-                    bit=int(bit) if bit is not None else None,
-                    iec_type=v.type.name,
-                    get=(lambda o=obj, a=attr: getattr(o, a)),
-                    set=_setter(obj, attr, v.type),
-                )
-            )
-    return out
+def _located_var(d: _LocatedDecl, obj) -> LocatedVar:
+    m = LOCATION.fullmatch(d.location)
+    assert m is not None
+    area, size, index, bit = m.group(1), m.group(2) or "X", int(m.group(3)), m.group(4)
+    attr = f"v_{d.name}"
+    return LocatedVar(
+        name=d.decl_name,
+        instance=d.instance,
+        location=d.location,
+        area=area,
+        size=size,
+        index=index,
+        bit=int(bit) if bit is not None else None,
+        iec_type=d.type.name,
+        get=(lambda o=obj, a=attr: getattr(o, a)),
+        set=_setter(obj, attr, d.type),
+    )

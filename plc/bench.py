@@ -3,6 +3,8 @@
 1. scans per CPU second of the soft-PLC on the conformance PID case and on the largest program
    the project ships (the bundle: library + application); CPU time, so a busy machine does not
    lower the figure;
+   and the CPU time of loading the bundle: the first load in a process (parse, generate, compile) against
+   the next (the compiled code kept: a harness loads it for its reference copy and for every soft-PLC);
 2. wall time of 6,000 stepped scans with one Modbus write and one read per scan over
    loopback (soft-PLC in a separate process, as a harness sees it), in three request styles;
 3. figures of the other packages: `modbus_bridge.bench.run(quick)`, `plc.bench_adapter.run(quick)`,
@@ -109,12 +111,30 @@ def scan_rates(quick: bool) -> list[tuple[str, float | None, str]]:
     return rows
 
 
+def load_costs() -> tuple[float, float]:
+    """CPU seconds of loading the bundle the first time in this process and of loading it again."""
+    from plc.bundle import bundle_text
+    from plc.st.compiler import load_application
+
+    # a comment no earlier load had, so the first load compiles the program as a new process would
+    text = bundle_text() + f"\n(* load cost {time.time_ns()} *)\n"
+    costs = []
+    for _ in range(2):
+        start = time.process_time()
+        load_application([("<bundle>", text)])
+        costs.append(time.process_time() - start)
+    return costs[0], costs[1]
+
+
 def bench_scan_rates(quick: bool) -> None:
     for name, rate, note in scan_rates(quick):
         if rate is None:
             print(f"scan rate, {name}: {note}")
         else:
             print(f"scan rate, {name}: {rate:,.0f} scans per CPU second ({note})")
+    first, again = load_costs()
+    print(f"loading the bundle: {first:.3f} s CPU the first time in a process, {again:.3f} s again "
+          f"({first / again:.0f} x)")
 
 
 def _bench_program() -> tuple[Path, str]:

@@ -73,14 +73,21 @@ def scenario_speed(name: str) -> tuple[float, float, float, str | None]:
 
 @dataclass
 class RunWall:
-    """`thermost run` timed RUN_REPEATS times: the median wall and CPU time, the spread of the walls, the
-    worst exit code and the last line of the run that gave it."""
+    """`thermost run` timed several times: wall and CPU time of each run, the exit code and last line of
+    the first run that failed (of the last run when all passed)."""
 
-    wall_s: float
-    cpu_s: float
     walls: list[float]
+    cpus: list[float]
     code: int
     last: str
+
+    @property
+    def wall_s(self) -> float:
+        return statistics.median(self.walls)
+
+    @property
+    def cpu_s(self) -> float:
+        return statistics.median(self.cpus)
 
     @property
     def spread(self) -> str:
@@ -89,8 +96,8 @@ class RunWall:
 
 def default_run_wall(repeats: int = RUN_REPEATS) -> RunWall:
     """Wall and CPU time of the complete `thermost run` (new process: imports, bundle, soft-PLC start,
-    every variant, reports), the median of `repeats` runs: one run on a shared machine drifts by a tenth."""
-    walls, cpus, code, last = [], [], 0, ""
+    every variant, reports), `repeats` times: one run on a shared machine drifts by a tenth."""
+    timed = RunWall([], [], 0, "")
     for _ in range(repeats):
         with tempfile.TemporaryDirectory() as tmp:
             before = os.times()
@@ -101,14 +108,14 @@ def default_run_wall(repeats: int = RUN_REPEATS) -> RunWall:
                 text=True,
                 check=False,
             )
-            walls.append(time.perf_counter() - t0)
+            timed.walls.append(time.perf_counter() - t0)
             after = os.times()
-        cpus.append((after.children_user - before.children_user)
-                    + (after.children_system - before.children_system))
-        if proc.returncode != 0 or code == 0:  # the last line of a failed run, else of the last run
-            code = proc.returncode
-            last = ((proc.stderr.strip() or proc.stdout.strip()).splitlines()[-1:] or [""])[0]
-    return RunWall(statistics.median(walls), statistics.median(cpus), walls, code, last)
+        timed.cpus.append((after.children_user - before.children_user)
+                          + (after.children_system - before.children_system))
+        if timed.code == 0:
+            timed.code = proc.returncode
+            timed.last = ((proc.stderr.strip() or proc.stdout.strip()).splitlines()[-1:] or [""])[0]
+    return timed
 
 
 def run(quick: bool) -> None:

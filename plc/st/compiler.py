@@ -122,12 +122,17 @@ LOCATION = re.compile(r"%([IQM])([XBWDL])?(\d+)(?:\.(\d+))?")
 
 @dataclass(frozen=True)
 class _LocatedDecl:
-    """A located variable as declared: in a program instance (`instance`) or the CONFIGURATION ("")."""
+    """A located variable as declared, its location parsed: in a program instance (`instance`) or the
+    CONFIGURATION ("")."""
 
     instance: str
     name: str  # lower-case, the attribute is v_<name>
     decl_name: str
-    location: str
+    location: str  # e.g. "%MD3"
+    area: str  # I Q M
+    size: str  # X B W D L
+    index: int
+    bit: int | None
     type: Type
 
 
@@ -144,12 +149,16 @@ class _Compiled:
 def _located_decls(comp: Compiler, instances: Instances) -> tuple[_LocatedDecl, ...]:
     owners: list[tuple[str, dict[str, Var]]] = [("", comp.globals)]
     owners += [(inst, comp.pous[cls.split("_", 1)[1]].vars) for inst, cls, _ in instances]
-    return tuple(
-        _LocatedDecl(inst, name, v.decl_name or name, v.location, v.type)
-        for inst, table in owners
-        for name, v in table.items()
-        if v.location and LOCATION.fullmatch(v.location)
-    )
+    decls = []
+    for inst, table in owners:
+        for name, v in table.items():
+            m = LOCATION.fullmatch(v.location) if v.location else None
+            if m is None:
+                continue
+            area, size, index, bit = m.group(1), m.group(2) or "X", int(m.group(3)), m.group(4)
+            decls.append(_LocatedDecl(inst, name, v.decl_name or name, v.location, area, size, index,
+                                      int(bit) if bit is not None else None, v.type))
+    return tuple(decls)
 
 
 @functools.lru_cache(maxsize=COMPILED_KEPT)
@@ -192,18 +201,15 @@ def _setter(obj, attr: str, t: Type):
 
 
 def _located_var(d: _LocatedDecl, obj) -> LocatedVar:
-    m = LOCATION.fullmatch(d.location)
-    assert m is not None
-    area, size, index, bit = m.group(1), m.group(2) or "X", int(m.group(3)), m.group(4)
     attr = f"v_{d.name}"
     return LocatedVar(
         name=d.decl_name,
         instance=d.instance,
         location=d.location,
-        area=area,
-        size=size,
-        index=index,
-        bit=int(bit) if bit is not None else None,
+        area=d.area,
+        size=d.size,
+        index=d.index,
+        bit=d.bit,
         iec_type=d.type.name,
         get=(lambda o=obj, a=attr: getattr(o, a)),
         set=_setter(obj, attr, d.type),

@@ -6,6 +6,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from modbus_bridge.scenario import load_scenario, resolve_scenario, shipped_scenarios
@@ -27,6 +28,10 @@ def _with_hold(tmp_path: Path) -> Path:
     path = tmp_path / "small_hold.toml"
     path.write_text(text, encoding="utf-8")
     return path
+
+
+def _images(md: str) -> list[str]:
+    return re.findall(r"^!\[[^\]]*\]\(([^)]+)\)$", md, flags=re.MULTILINE)
 
 
 def _rows(md: str) -> dict[str, list[str]]:
@@ -67,6 +72,8 @@ def test_scorecard_report_on_a_small_scenario(tmp_path, capsys):
     assert "<table>" in (out / "scorecard.html").read_text(encoding="utf-8")
     updated = doc.read_text(encoding="utf-8")
     assert "prose stays" in updated and "STALE-BLOCK" not in updated and HEADER_LINE in updated
+    assert _images(updated) == ["img/scorecard_small_fopdt.png"]  # drawn beside the markdown file
+    assert (tmp_path / "img" / "scorecard_small_fopdt.png").stat().st_size > 10_000
     assert "Produced by `thermost scorecard" in updated
     assert "best fixed PID" in capsys.readouterr().out
 
@@ -98,6 +105,9 @@ def test_committed_docs_block_has_the_report_structure():
         if "Not scored:" in sec:
             continue
         assert HEADER_LINE in sec
+        images = _images(sec)
+        assert len(images) == 1, f"{name}: one figure of the traces, got {images}"
+        assert (ROOT / "docs" / images[0]).is_file(), f"{name}: {images[0]} is missing"
         rows = _rows(sec)
         assert any(r.startswith("best fixed PID") for r in rows)
         if re.search(r"; setpoint step \S+ → ", sec):
@@ -158,6 +168,36 @@ def test_fuzzy_row_without_a_bound_says_it_shows_the_base_set(seed003_outcomes):
     ]
     row = variant_row(variant, dataclasses.replace(o, metrics=unbounded), ms_of)
     assert row_cells(row)[5].endswith("(base set)") and "no Ms bound in use" in row.note
+
+
+def _ratio_defaults() -> tuple[float, float]:
+    """The fuzzy adapter's configured ratio bounds: ST_FuzzyParameter's defaults, which the scenario keeps."""
+    text = (ROOT / "st_lib" / "fuzzy" / "ST_FuzzyParameter.st").read_text(encoding="utf-8")
+    lo, hi = (float(re.search(rf"fKpRatio{w} : REAL := ([0-9.]+);", text).group(1)) for w in ("Min", "Max"))
+    return lo, hi
+
+
+def test_the_figure_draws_the_gains_of_the_adapting_row_within_the_box_its_bound_kept(seed003_outcomes):
+    """The gain panel: Kp and Ki in use over the base set, for the fuzzy row only, and inside the box the PLC
+    reported (the base set scaled by the Ms bound, a share of the configured ratio bounds kept)."""
+    from modbus_bridge.scorecard.build import variant_row
+    from modbus_bridge.scorecard.figure import gain_ratios
+
+    outcomes, ms_of = seed003_outcomes
+    variant, o = outcomes["fuzzy PID"]
+    bound = next(m.values for m in o.scored_metrics() if "fuzzy_box_share" in m.values)
+    scale, share = bound["fuzzy_gain_scale"], bound["fuzzy_box_share"]
+    lo, hi = _ratio_defaults()
+    box = (scale * (1.0 + share * (lo - 1.0)), scale * (1.0 + share * (hi - 1.0)))
+    g = gain_ratios(variant_row(variant, o, ms_of), "step")
+    assert g is not None and g.ki is not None and g.t[0] == pytest.approx(0.0)
+    for ratio in (g.kp, g.ki):
+        assert box[0] * (1 - 1e-3) <= np.nanmin(ratio) and np.nanmax(ratio) <= box[1] * (1 + 1e-3)
+    print(f"fuzzy PID, Kp / base {np.nanmin(g.kp):.3f} .. {np.nanmax(g.kp):.3f}, "
+          f"box {box[0]:.3f} .. {box[1]:.3f}")
+    for name in ("PID (self-tuned)", "model-based PID"):
+        v, out = outcomes[name]
+        assert gain_ratios(variant_row(v, out, ms_of), "step") is None  # fixed gains: no panel
 
 
 def test_rows_are_judged_on_the_true_temperature_as_the_bound_is(seed003_outcomes):

@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..analysis import PhaseMetrics
-from ..loop import RunResult
+from ..loop import EFFECTIVE_GAIN_ROLES, RunResult
 from ..scenario import Phase, Scenario, Variant, Zone
 
 DERIVATIVE_FILTER_RATIO = 0.25  # Td = Tv / 4, as the project's tuner sets it
@@ -128,6 +128,8 @@ class Outcome:
     phases: list[tuple[str, float, float]]  # zone 1: name, start, end
     scored_from_phase: int = 0
     y: np.ndarray | None = None  # the controller's output register, % (what a PWM output modulates)
+    # the gains the PID ran with (EFFECTIVE_GAIN_ROLES: the set in use, as an adapter left it), per step
+    gains: dict[str, np.ndarray] = field(default_factory=dict)
     error: str | None = None
     wall_s: float = 0.0
     plant_time_s: float = 0.0
@@ -172,6 +174,9 @@ def outcome_of(label: str, result: RunResult, metrics: list[PhaseMetrics], score
         phases=[(p.name, p.t_start, p.t_end) for p in tr.phases],
         scored_from_phase=scored_from_phase,
         y=np.asarray(tr.y) if len(tr.y) == len(tr.t) else None,
+        gains={
+            r: np.asarray(tr.gains[r]) for r in EFFECTIVE_GAIN_ROLES if len(tr.gains.get(r, ())) == len(tr.t)
+        },
         error=result.error,
         plant_time_s=result.plant_time_s,
     )

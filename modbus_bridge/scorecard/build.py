@@ -50,6 +50,8 @@ class Row:
     gains: PidGains | None = None
     note: str = ""
     outcome: Outcome | None = None
+    adapts: bool = False  # the gains move during the run (the fuzzy adapter on)
+    cooling: bool = False  # `gains` is the cooling set (a zone tuned on its cooling side)
     vs_bound: float = math.nan
     vs_best: float = math.nan
 
@@ -134,6 +136,7 @@ def variant_row(v: Variant, o: Outcome, ms_of: Callable[[PidGains], float], cool
     bound leaves: Ms is the worst over every set it can reach (fFuzzyMsReachable, on the identified model
     with the filter in use), not the base set's; without a bound in use, the base set's, said so."""
     row = _row(v.name, o, _tuned_gains(o, cooling), ms_of)
+    row.adapts, row.cooling = bool(v.fuzzy), cooling
     bound = adapter_bound(o)
     if bound is not None:
         row.ms, row.ms_what = bound["fuzzy_ms_reachable"], "worst reachable"
@@ -223,10 +226,15 @@ def build_card(sc: Scenario, executor: Executor, evals: int) -> Card:
     return card
 
 
+def window(o: Outcome, phase: str | None) -> tuple[np.ndarray, float]:
+    """The samples from the start of `phase` (or of the scored window) to the end, and that start."""
+    start = next((p[1] for p in o.phases if p[0] == phase), o.scored_start)
+    return o.t >= start - 1e-9, start
+
+
 def trace_window(o: Outcome, phase: str | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """t from the start of `phase` (or of the scored window), PV and the controller's output (its register:
     a PWM heater's duty switches 0/100 every period and would hide it), from there to the end."""
-    start = next((p[1] for p in o.phases if p[0] == phase), o.scored_start)
-    m = o.t >= start - 1e-9
+    m, start = window(o, phase)
     out = o.y if o.y is not None else o.u
     return o.t[m] - start, o.pv[m], out[m]

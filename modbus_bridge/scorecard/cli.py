@@ -17,6 +17,7 @@ if TYPE_CHECKING:
 QUICK_SCENARIOS = ("seed003_hotend_fuzzy",)
 QUICK_EVALS = 6
 FULL_EVALS = 30
+IMAGE_DIR = "img"  # beside the markdown file given to --markdown
 BLOCK = re.compile(r"(<!-- figures:scorecard -->\n).*?(<!-- /figures:scorecard -->)", re.DOTALL)
 
 
@@ -36,7 +37,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help=f"optimiser experiments per scenario (default {FULL_EVALS}, --quick {QUICK_EVALS})",
     )
     p.add_argument("-o", "--out", metavar="DIR", default="out/scorecard", help="report directory")
-    p.add_argument("--markdown", metavar="FILE", help="also put the tables into FILE's figures block")
+    p.add_argument(
+        "--markdown",
+        metavar="FILE",
+        help=f"also put the tables into FILE's figures block, with their PNGs in {IMAGE_DIR}/ beside FILE",
+    )
     p.add_argument("--scheduler", metavar="ADDR", help="Dask scheduler address (default: local processes)")
     p.add_argument("--workers", type=int, default=None, metavar="N", help="local worker processes")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -51,10 +56,14 @@ def command_line(args: argparse.Namespace) -> str:
     return " ".join(parts)
 
 
-def cards_markdown(cards: list[Card], command: str) -> str:
+def cards_markdown(cards: list[Card], command: str, pngs: dict[str, str] | None = None) -> str:
+    """The block's text; `pngs`: scenario name -> the path of its PNG relative to the markdown file."""
     from .report import card_markdown
 
-    return f"Produced by `{command}`.\n\n" + "\n".join(card_markdown(c, None) for c in cards)
+    pngs = pngs or {}
+    return f"Produced by `{command}`.\n\n" + "\n".join(
+        card_markdown(c, pngs.get(c.scenario.name)) for c in cards
+    )
 
 
 def quick_markdown() -> str:
@@ -70,7 +79,16 @@ def quick_markdown() -> str:
 
 
 def update_markdown(path: Path, cards: list[Card], command: str) -> None:
-    body = cards_markdown(cards, command)
+    """The tables into FILE's figures block, each with its PNG, drawn into IMAGE_DIR beside FILE."""
+    from .report import png_name, write_png
+
+    pngs = {}
+    for card in cards:
+        name = png_name(card)
+        if name:
+            write_png(card, path.parent / IMAGE_DIR / name)
+            pngs[card.scenario.name] = f"{IMAGE_DIR}/{name}"
+    body = cards_markdown(cards, command, pngs)
     text = path.read_text(encoding="utf-8") if path.exists() else ""
     block = f"<!-- figures:scorecard -->\n{body}<!-- /figures:scorecard -->"
     if BLOCK.search(text):

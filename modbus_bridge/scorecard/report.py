@@ -1,4 +1,4 @@
-"""Scorecard output: markdown table per scenario, an HTML page, a PNG of the overlaid traces."""
+"""Scorecard output: markdown table per scenario, an HTML page, a PNG of the overlaid traces (figure.py)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,8 @@ import math
 from pathlib import Path
 
 from ..report import slug
-from .build import Card, Row, trace_window
+from .build import Card, Row
+from .figure import write_png
 
 HEADER = (
     "controller",
@@ -70,43 +71,9 @@ def card_markdown(card: Card, png: str | None) -> str:
     return "\n".join([*lines, ""])
 
 
-def write_png(card: Card, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, (ax, axu) = plt.subplots(2, 1, figsize=(9, 6.5), sharex=True, height_ratios=(2, 1))
-    end = 0.0
-    for r in card.rows:
-        if r.outcome is None:
-            continue
-        t, pv, u = trace_window(r.outcome, card.scored_phase)
-        ax.plot(t, pv, lw=1.1, label=r.name)
-        axu.plot(t, u, lw=0.9)
-        end = max(end, float(t[-1]) if t.size else 0.0)
-    if card.bound is not None:
-        b = card.bound
-        ax.plot(b.t, b.y, "k--", lw=1.2, label="bound (bang-hold)")
-        u_b = [b.u_full if x < b.switch_s else b.u_hold for x in b.t]
-        axu.plot(b.t, u_b, "k--", lw=1.0)
-        r0 = card.step[1]
-        band = 0.02 * abs(card.step[1] - card.step[0])
-        ax.axhspan(r0 - band, r0 + band, color="0.85", zorder=0, label="±2 % band")
-    ax.set_xlim(0.0, end if end > 0 else None)
-    ax.set_ylabel("PV (°C)")
-    what = (f"from the step (phase '{card.scored_phase}')" if card.step
-            else f"from the first load or ramp (phase '{card.scored_phase}')")
-    ax.set_title(f"{card.scenario.name}: zone 1 {what}", fontsize=10)
-    ax.legend(fontsize=7, loc="best")
-    ax.grid(alpha=0.3)
-    axu.set_ylabel("controller output (%)")
-    axu.set_xlabel("t (s)")
-    axu.grid(alpha=0.3)
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+def png_name(card: Card) -> str | None:
+    """The file name of the card's PNG; None when nothing was scored."""
+    return None if card.skipped or not card.rows else f"scorecard_{slug(card.scenario.name)}.png"
 
 
 def write_reports(cards: list[Card], out_dir: Path, command: str) -> dict[str, Path]:
@@ -114,9 +81,8 @@ def write_reports(cards: list[Card], out_dir: Path, command: str) -> dict[str, P
     parts = [f"Produced by `{command}`.", ""]
     html_parts = [f"<p>Produced by <code>{html.escape(command)}</code>.</p>"]
     for card in cards:
-        png = None
-        if not card.skipped and card.rows:
-            png = f"scorecard_{slug(card.scenario.name)}.png"
+        png = png_name(card)
+        if png:
             write_png(card, out_dir / png)
         parts.append(card_markdown(card, png))
         html_parts.append(card_html(card, png))

@@ -176,10 +176,11 @@ def openplc_scan() -> str:
 
 @producer("scorecard", measured=True)
 def scorecard() -> str:
-    """docs/scorecard.md: the quick scorecard (optimiser experiments: rewritten by `make docs` only)."""
+    """docs/scorecard.md: the quick scorecard (optimiser experiments: rewritten by `make docs` only), its
+    figure drawn into docs/img."""
     from .scorecard.cli import quick_markdown
 
-    return quick_markdown()
+    return quick_markdown(DOCS)
 
 
 # ---- the block machinery ------------------------------------------------------------------------

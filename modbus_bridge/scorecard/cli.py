@@ -66,8 +66,9 @@ def cards_markdown(cards: list[Card], command: str, pngs: dict[str, str] | None 
     )
 
 
-def quick_markdown() -> str:
-    """The `figures:scorecard` block: `thermost scorecard --quick` (the docs producer)."""
+def quick_markdown(page_dir: Path) -> str:
+    """The `figures:scorecard` block: `thermost scorecard --quick` (the docs producer), its figures drawn
+    into IMAGE_DIR of `page_dir`."""
     from ..optimise.executor import make_executor
     from ..scenario import load_scenario, resolve_scenario
     from .build import build_card
@@ -75,20 +76,25 @@ def quick_markdown() -> str:
     with make_executor() as executor:
         scenarios = [load_scenario(resolve_scenario(n)) for n in QUICK_SCENARIOS]
         cards = [build_card(sc, executor, QUICK_EVALS) for sc in scenarios]
-    return cards_markdown(cards, "thermost scorecard --quick")
+    return cards_markdown(cards, "thermost scorecard --quick", draw_figures(cards, page_dir))
 
 
-def update_markdown(path: Path, cards: list[Card], command: str) -> None:
-    """The tables into FILE's figures block, each with its PNG, drawn into IMAGE_DIR beside FILE."""
+def draw_figures(cards: list[Card], page_dir: Path) -> dict[str, str]:
+    """Each scored card's PNG drawn into IMAGE_DIR of `page_dir`; scenario name -> path relative to it."""
     from .report import png_name, write_png
 
     pngs = {}
     for card in cards:
         name = png_name(card)
         if name:
-            write_png(card, path.parent / IMAGE_DIR / name)
+            write_png(card, page_dir / IMAGE_DIR / name)
             pngs[card.scenario.name] = f"{IMAGE_DIR}/{name}"
-    body = cards_markdown(cards, command, pngs)
+    return pngs
+
+
+def update_markdown(path: Path, cards: list[Card], command: str) -> None:
+    """The tables into FILE's figures block, each with its PNG, drawn into IMAGE_DIR beside FILE."""
+    body = cards_markdown(cards, command, draw_figures(cards, path.parent))
     text = path.read_text(encoding="utf-8") if path.exists() else ""
     block = f"<!-- figures:scorecard -->\n{body}<!-- /figures:scorecard -->"
     if BLOCK.search(text):

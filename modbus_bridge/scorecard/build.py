@@ -230,11 +230,3 @@ def window(o: Outcome, phase: str | None) -> tuple[np.ndarray, float]:
     """The samples from the start of `phase` (or of the scored window) to the end, and that start."""
     start = next((p[1] for p in o.phases if p[0] == phase), o.scored_start)
     return o.t >= start - 1e-9, start
-
-
-def trace_window(o: Outcome, phase: str | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """t from the start of `phase` (or of the scored window), PV and the controller's output (its register:
-    a PWM heater's duty switches 0/100 every period and would hide it), from there to the end."""
-    m, start = window(o, phase)
-    out = o.y if o.y is not None else o.u
-    return o.t[m] - start, o.pv[m], out[m]

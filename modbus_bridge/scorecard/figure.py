@@ -12,9 +12,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .build import Card, Row, trace_window, window
+from ..metrics import BAND_2PCT
+from .build import Card, Row, window
 
-BAND_SHARE = 0.02  # the 2 % settling band, of the step
 ZOOM_BANDS = 6.0  # the near-the-target panel spans this many bands either side of the setpoint
 ADAPTING = 0.01  # a row whose gain ratios leave 1 by more than this share is drawn in the gain panel
 
@@ -62,12 +62,11 @@ def write_png(card: Card, path: Path) -> None:
     colours = {}
     end, band = 0.0, None
     if card.step is not None:
-        band = BAND_SHARE * abs(card.step[1] - card.step[0])
+        band = BAND_2PCT * abs(card.step[1] - card.step[0])
     for r in card.rows:
         if r.outcome is None:
             continue
-        t, pv, u = trace_window(r.outcome, card.scored_phase)
-        true_c, w = _true_and_setpoint(r, card.scored_phase)
+        t, true_c, w, u = _traces(r, card.scored_phase)
         (line,) = ax.plot(t, true_c, lw=1.1, label=r.name)
         colours[r.name] = line.get_color()
         axz.plot(t, true_c - w, lw=1.0, color=line.get_color())
@@ -112,8 +111,11 @@ def write_png(card: Card, path: Path) -> None:
     plt.close(fig)
 
 
-def _true_and_setpoint(r: Row, phase: str | None) -> tuple[np.ndarray, np.ndarray]:
+def _traces(r: Row, phase: str | None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """t from the start of `phase` (or of the scored window), the true temperature, the setpoint and the
+    controller's output (its register: a PWM heater's duty switches 0/100 every period and would hide it)."""
     o = r.outcome
     assert o is not None
-    m, _ = window(o, phase)
-    return o.true_c[m], o.setpoint[m]
+    m, start = window(o, phase)
+    out = o.y if o.y is not None else o.u
+    return o.t[m] - start, o.true_c[m], o.setpoint[m], out[m]

@@ -1,7 +1,10 @@
-"""True-model pieces of the optimiser and scorecard: the bang-hold bound, Ms against python-control,
-SIMC/AMIGO against the formulas of control.md, the numerical frequency response of a nonlinear plant."""
+"""True-model pieces of the optimiser and scorecard: the bang-hold bound and the one with a brake, Ms against
+python-control, SIMC/AMIGO against the formulas of control.md, the numerical frequency response of a
+nonlinear plant."""
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 import pytest
@@ -12,6 +15,7 @@ from modbus_bridge.plants import response
 from modbus_bridge.plants.response import (
     FopdtFit,
     PlantModel,
+    bang_brake_hold_bound,
     bang_hold_bound,
     exact_frequency_response,
     frequency_response_from_step,
@@ -53,6 +57,44 @@ def test_the_superposed_bound_of_a_linear_plant_is_the_simulated_one(pm, y0, r, 
     assert (fast.switch_s, fast.settling_s) == (slow.switch_s, slow.settling_s)
     assert fast.overshoot_pct == pytest.approx(slow.overshoot_pct, abs=1e-9)
     assert np.max(np.abs(fast.y - slow.y)) < 1e-9
+
+
+def _chain_step(x: np.ndarray, order: int) -> np.ndarray:
+    """Unit step response of n equal unit lags at x = t / T (0 before the step)."""
+    x = np.maximum(x, 0.0)
+    return 1.0 - np.exp(-x) * sum(x**k / math.factorial(k) for k in range(order))
+
+
+def test_a_brake_between_full_and_holding_power_settles_a_chain_of_lags_sooner():
+    """Three equal lags: the bang-brake-hold search (a grid refined around its best) finds the optimum that
+    a brute force over every pair of switch times on the same dt finds in the chain's closed-form response,
+    and beats one switch; on a first-order lag a brake gains nothing; a plant that is not superposable gets
+    no such bound."""
+    k, tau, order, delay, ambient = 2.0, 20.0, 3, 1.0, 25.0
+    chain = PlantModel("nlag", {"gain_c_per_pct": k, "time_constant_s": tau, "order": order,
+                                "dead_time_s": delay, "ambient_c": ambient})
+    y0, r, dt, horizon = 80.0, 120.0, 0.5, 600.0
+    one = bang_hold_bound(chain, y0, r, dt, horizon)
+    two = bang_brake_hold_bound(chain, y0, r, dt, horizon)
+    assert two is not None and (two.u_full, two.u_brake) == (100.0, 0.0) and two.brake_s > 0.0
+    assert two.settling_s < 0.9 * one.settling_s and two.overshoot_pct < 2.0
+    u0, uh = (y0 - ambient) / k, (r - ambient) / k
+    t = dt * np.arange(1, round(horizon / dt) + 1)
+    best = math.inf
+    for a in np.arange(0.0, 100.0, dt):
+        for b in np.arange(0.0, 60.0, dt):
+            y = ambient + k * (u0 + (100.0 - u0) * _chain_step((t - delay) / tau, order)
+                               - 100.0 * _chain_step((t - a - delay) / tau, order)
+                               + uh * _chain_step((t - a - b - delay) / tau, order))
+            best = min(best, response._settling(t, y, y0, r))
+    assert two.settling_s == pytest.approx(best, abs=1e-6)
+    print(f"three lags: one switch {one.settling_s:.1f} s, with a brake {two.settling_s:.1f} s "
+          f"({two.pulse_s:.1f} s full, {two.brake_s:.1f} s off; brute force {best:.1f} s)")
+    first_order = bang_brake_hold_bound(SEED003, 160.0, 200.0, 0.1, 150.0)
+    assert first_order is not None
+    one_switch = bang_hold_bound(SEED003, 160.0, 200.0, 0.1, 150.0)
+    assert first_order.settling_s == pytest.approx(one_switch.settling_s)
+    assert bang_brake_hold_bound(PlantModel("tclab", {}), 45.0, 60.0, 0.5, 1000.0) is None
 
 
 def test_numerical_frequency_response_matches_the_transfer_function():

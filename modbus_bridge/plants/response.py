@@ -1,5 +1,6 @@
 """Offline analysis of a plant model (the "true model" of a scenario): rest input, step response around
-an operating point, frequency response, a two-point FOPDT fit, and the bang-hold bound.
+an operating point, frequency response, a two-point FOPDT fit, the bang-hold bound and the bang-brake-hold
+one (a brake between the two).
 
 Everything here simulates the plant classes themselves, so it holds for every model the harness runs
 (linear, nonlinear, multi-channel). Nonlinear plants are linearised by a small step around the
@@ -270,6 +271,87 @@ def bang_hold_bound(pm: PlantModel, y0: float, r: float, dt: float, horizon_s: f
     direction = math.copysign(1.0, r - y0)
     over = max(0.0, float(np.max((y - r) * direction))) / abs(r - y0) * 100.0
     return BangHold(ts, settle, over, u_full, ur, t_grid, y)
+
+
+@dataclass
+class BangBrakeHold:
+    """Full power towards r, then the other limit (the brake), then the holding power."""
+
+    pulse_s: float  # the limit towards r until this time after the step
+    brake_s: float  # then the other limit for this long (0: none, the bang-hold input)
+    settling_s: float  # 2 % settling of the true temperature
+    overshoot_pct: float
+    u_full: float
+    u_brake: float
+    u_hold: float
+    t: np.ndarray
+    y: np.ndarray
+
+
+BRAKE_GRID = 100  # candidates per axis (pulse, brake) of the coarse grid; then every dt around the best
+BRAKE_REFINE_CELLS = 2  # the fine grid spans this many coarse cells either side of the best
+
+
+def bang_brake_hold_bound(
+    pm: PlantModel, y0: float, r: float, dt: float, horizon_s: float
+) -> BangBrakeHold | None:
+    """The fastest 2 % settling two switches within the actuator range give from rest at y0 to r: full power
+    (or full cooling), then the other limit, then the holding power; both times on a grid, refined to dt
+    around its best (the settling time is not smooth in them: a local search stops in the wrong basin). A
+    plant of order n > 1 needs up to n switches for the time-optimal input; the brake is the one a chain of
+    lags gains most from, so this is nearer the physical limit than `bang_hold_bound` on such plants. The
+    other channels of a multi-channel plant keep the input that held the start.
+
+    Linear plants only (None otherwise): each candidate is a superposition of three simulated responses, as
+    in `bang_hold_bound`; simulating every candidate of the grid would take minutes per plant."""
+    plant = pm.build()
+    if not _is_linear(plant):
+        return None
+    u0 = rest_input(pm, y0)
+    ur = rest_input(pm, r, u_others=u0)
+    towards, away = (plant.u_max_pct, plant.u_min_pct) if r > y0 else (plant.u_min_pct, plant.u_max_pct)
+    start = _Sim(pm, dt, start_c=y0)
+    _settle(start, u0)
+
+    def simulated(a: float, b: float) -> np.ndarray:
+        def u(t: float) -> float:
+            return towards if t < a - 1e-9 else (away if t < a + b - 1e-9 else ur)
+
+        return copy.deepcopy(start).run(u, u0, horizon_s)
+
+    y_full = simulated(horizon_s, 0.0)
+    n = y_full.size
+    t_grid = dt * np.arange(1, n + 1)
+    to_away = simulated(0.0, horizon_s) - y_full  # the other limit from the start, less full power
+    away_to_hold = simulated(0.0, 0.0) - y_full - to_away
+
+    def response(a: float, b: float) -> np.ndarray:
+        ka = min(n, max(0, math.ceil(a / dt - 1e-9)))
+        kb = min(n, max(0, math.ceil((a + b) / dt - 1e-9)))
+        y = y_full.copy()
+        y[ka:] += to_away[: n - ka]
+        y[kb:] += away_to_hold[: n - kb]
+        return y
+
+    def best_of(pulses: np.ndarray, brakes: np.ndarray, best: tuple[float, float, float]):
+        for a in pulses:
+            for b in brakes:
+                best = min(best, (_settling(t_grid, response(a, b), y0, r), a, b))
+        return best
+
+    # full power alone reaching r bounds both times: a longer pulse or brake only moves further away
+    reach = np.flatnonzero((y_full - r) * math.copysign(1.0, r - y0) >= 0.0)
+    span = float(t_grid[reach[0]]) if reach.size else horizon_s
+    step = max(dt, span / BRAKE_GRID)
+    coarse = dt * np.round(np.arange(0.0, span + step / 2, step) / dt)
+    best = best_of(coarse, coarse, (math.inf, 0.0, 0.0))
+    reach_fine = BRAKE_REFINE_CELLS * step
+    fine_a = dt * np.round(np.arange(max(0.0, best[1] - reach_fine), best[1] + reach_fine + dt / 2, dt) / dt)
+    fine_b = dt * np.round(np.arange(max(0.0, best[2] - reach_fine), best[2] + reach_fine + dt / 2, dt) / dt)
+    settle, a, b = best_of(fine_a, fine_b, best)
+    y = response(a, b)
+    over = max(0.0, float(np.max((y - r) * math.copysign(1.0, r - y0)))) / abs(r - y0) * 100.0
+    return BangBrakeHold(float(a), float(b), settle, over, towards, away, ur, t_grid, y)
 
 
 def full_power_reach(pm: PlantModel, y0: float, r: float, dt: float, horizon_s: float,

@@ -32,10 +32,12 @@ from ..optimise.experiment import (
 )
 from ..optimise.robustness import plant_model, scored_step
 from ..optimise.search import Optimiser, Settings
-from ..plants.response import BangHold, bang_hold_bound
+from ..plants.response import BangBrakeHold, BangHold, bang_brake_hold_bound, bang_hold_bound
 from ..scenario import Scenario, Variant
 
 BOUND_HORIZON_FACTOR = 10.0
+BOUND_ROW = "bound (bang-hold, true model)"
+BRAKED_ROW = "bound with a brake (bang-brake-hold, true model)"
 
 
 @dataclass
@@ -61,6 +63,7 @@ class Card:
     scenario: Scenario
     rows: list[Row] = field(default_factory=list)
     bound: BangHold | None = None
+    braked: BangBrakeHold | None = None  # the bound with a brake, where one settles sooner (linear plants)
     step: tuple[float, float] | None = None
     skipped: str | None = None
     tau: float = math.nan
@@ -176,54 +179,62 @@ def build_card(sc: Scenario, executor: Executor, evals: int) -> Card:
         card.step = (y0, r)
         horizon = BOUND_HORIZON_FACTOR * (fit.time_constant_s + fit.dead_time_s)
         card.bound = bang_hold_bound(plant_model(sc), y0, r, sc.dt_s, horizon)
+        braked = bang_brake_hold_bound(plant_model(sc), y0, r, sc.dt_s, horizon)
+        if braked is not None and braked.brake_s > 0.0 and braked.settling_s < card.bound.settling_s:
+            card.braked = braked
     exps = [Experiment(v.name, variant_scenario(sc, i), None, scored_from) for i, v in enumerate(sc.variants)]
     outcomes = executor.map(run_experiment, exps)
     best = opt.run()  # evaluates SIMC and AMIGO first
+    references = _reference_rows(card)
     rows = []
-    if card.bound is not None:
-        b = card.bound
-        rows.append(
-            Row(
-                "bound (bang-hold, true model)",
-                settling_s=b.settling_s,
-                overshoot_pct=b.overshoot_pct,
-                note=f"100 % for {b.switch_s:.1f} s, then {b.u_hold:.1f} %",
-            )
-        )
+    best_row = None
     if best.best.outcome is not None:
-        rows.append(
-            _row(
-                f"best fixed PID ({len(best.history)} experiments)",
-                best.best.outcome,
-                best.best.gains,
-                opt.model.ms,
-            )
-        )
+        name = f"best fixed PID ({len(best.history)} experiments)"
+        best_row = _row(name, best.best.outcome, best.best.gains, opt.model.ms)
+        rows.append(best_row)
     for name, ev in opt.start_evaluations.items():
         if ev.outcome is not None:
             rows.append(_row(name, ev.outcome, ev.gains, opt.model.ms))
     cooling = tunes_cooling(sc.zones[0])
     for v, o in zip(sc.variants, outcomes, strict=True):
         rows.append(variant_row(v, o, opt.model.ms, cooling=cooling))
-    best_iae = rows[1].iae if best.best.outcome is not None and len(rows) > 1 else math.nan
-    if card.bound is None:
-        best_iae = rows[0].iae if rows and rows[0].outcome is not None else math.nan
-    for row in rows:
+    best_iae = math.nan
+    if best_row is not None:
+        best_iae = best_row.iae
+    elif card.bound is None and rows and rows[0].outcome is not None:
+        best_iae = rows[0].iae
+    for row in references + rows:
         if card.bound is not None and not math.isnan(row.settling_s) and math.isfinite(card.bound.settling_s):
             row.vs_bound = row.settling_s / card.bound.settling_s
         if row.outcome is not None and math.isfinite(best_iae) and best_iae > 0:
             row.vs_best = row.iae / best_iae
     limits = opt.settings
-    for row in rows[1 if card.bound is not None else 0 :]:
+    for row in rows:
         if row.overshoot_pct > limits.max_overshoot_pct or row.ms > limits.max_ms:
             note = (
                 f"outside the search limits (overshoot <= {limits.max_overshoot_pct:g} %, "
                 f"Ms <= {limits.max_ms:g})"
             )
             row.note = f"{row.note}; {note}" if row.note else note
+    rows = references + rows
     card.rows = rows
     card.scored_phase = sc.zones[0].phases[scored_from].name
     return card
+
+
+def _reference_rows(card: Card) -> list[Row]:
+    """The open-loop rows on the true model: the bound, and the bound with a brake where it settles sooner."""
+    rows = []
+    if card.bound is not None:
+        b = card.bound
+        note = f"{b.u_full:.0f} % for {b.switch_s:.1f} s, then {b.u_hold:.1f} %"
+        rows.append(Row(BOUND_ROW, settling_s=b.settling_s, overshoot_pct=b.overshoot_pct, note=note))
+    if card.braked is not None:
+        k = card.braked
+        note = (f"{k.u_full:.0f} % for {k.pulse_s:.1f} s, {k.u_brake:.0f} % for {k.brake_s:.1f} s, "
+                f"then {k.u_hold:.1f} %")
+        rows.append(Row(BRAKED_ROW, settling_s=k.settling_s, overshoot_pct=k.overshoot_pct, note=note))
+    return rows
 
 
 def window(o: Outcome, phase: str | None) -> tuple[np.ndarray, float]:

@@ -1,6 +1,6 @@
 """The scorecard's PNG of one scenario: every row's trace over the scored window, overlaid.
 
-Panels: the true temperature (what the columns judge) with the bound and the 2 % band; the same near its
+Panels: the true temperature (what the columns judge) with the bounds and the 2 % band; the same near its
 target, as the deviation from the setpoint, where overshoot and settling are decided; the controller's
 output; and, when a row adapts its gains (the fuzzy PID), its Kp and Ki over the base set it started from,
 which shows why it lands where it does."""
@@ -78,6 +78,13 @@ def write_png(card: Card, path: Path) -> None:
         axz.plot(b.t, np.asarray(b.y) - card.step[1], "k--", lw=1.0)
         u_b = [b.u_full if x < b.switch_s else b.u_hold for x in b.t]
         axu.plot(b.t, u_b, "k--", lw=1.0)
+    if card.braked is not None:
+        k = card.braked
+        ax.plot(k.t, k.y, "k:", lw=1.2, label="bound with a brake")
+        axz.plot(k.t, np.asarray(k.y) - card.step[1], "k:", lw=1.0)
+        braking = k.pulse_s + k.brake_s
+        u_k = [k.u_full if x < k.pulse_s else k.u_brake if x < braking else k.u_hold for x in k.t]
+        axu.plot(k.t, u_k, "k:", lw=1.0)
     if band is not None:
         r0 = card.step[1]
         ax.axhspan(r0 - band, r0 + band, color="0.85", zorder=0, label="±2 % band")

@@ -207,6 +207,10 @@ class BangHold:
     t: np.ndarray
     y: np.ndarray
 
+    def inputs(self) -> np.ndarray:
+        """The input at each of `t`."""
+        return np.where(self.t < self.switch_s, self.u_full, self.u_hold)
+
 
 def _settling(t: np.ndarray, y: np.ndarray, y0: float, r: float) -> float:
     band = BAND_2PCT * abs(r - y0)
@@ -216,6 +220,36 @@ def _settling(t: np.ndarray, y: np.ndarray, y0: float, r: float) -> float:
     if outside[-1] == y.size - 1:
         return math.inf
     return float(t[outside[-1] + 1])
+
+
+def _overshoot_pct(y: np.ndarray, y0: float, r: float) -> float:
+    return max(0.0, float(np.max((y - r) * math.copysign(1.0, r - y0)))) / abs(r - y0) * 100.0
+
+
+def _from_rest(pm: PlantModel, y0: float, r: float, dt: float) -> tuple[Plant, float, float, _Sim]:
+    """The plant, the input that holds y0, the one that holds r beside the others at it, and a simulation
+    at rest at y0 (to copy for each candidate input)."""
+    u0 = rest_input(pm, y0)
+    start = _Sim(pm, dt, start_c=y0)
+    _settle(start, u0)
+    return start.plant, u0, rest_input(pm, r, u_others=u0), start
+
+
+def _first_step(t: float, dt: float, n: int) -> int:
+    """The first of n steps of dt run with an input that changes at t."""
+    return min(n, max(0, math.ceil(t / dt - 1e-9)))
+
+
+def _plus_from(y: np.ndarray, k: int, change: np.ndarray) -> np.ndarray:
+    """y with `change` (a response from the start) added from step k on: a later input step, superposed."""
+    y[k:] += change[: y.size - k]
+    return y
+
+
+def _reach_s(t: np.ndarray, y_full: np.ndarray, y0: float, r: float, horizon_s: float) -> float:
+    """When the response at full power towards r crosses r (horizon_s if never): no switch comes later."""
+    reach = np.flatnonzero((y_full - r) * math.copysign(1.0, r - y0) >= 0.0)
+    return float(t[reach[0]]) if reach.size else horizon_s
 
 
 def _is_linear(plant: Plant) -> bool:
@@ -233,12 +267,8 @@ def bang_hold_bound(pm: PlantModel, y0: float, r: float, dt: float, horizon_s: f
     A linear plant is simulated twice, at full and at holding power: the switch at step k adds the holding
     response less the full-power one, both delayed by k (superposition, the same discrete model). Other
     plants are simulated once per candidate switch time."""
-    plant = pm.build()
-    u0 = rest_input(pm, y0)
-    ur = rest_input(pm, r, u_others=u0)
+    plant, u0, ur, start = _from_rest(pm, y0, r, dt)
     u_full = plant.u_max_pct if r > y0 else plant.u_min_pct
-    start = _Sim(pm, dt, start_c=y0)
-    _settle(start, u0)
 
     def simulated(ts: float) -> np.ndarray:
         return copy.deepcopy(start).run(lambda t: u_full if t < ts - 1e-9 else ur, u0, horizon_s)
@@ -250,17 +280,12 @@ def bang_hold_bound(pm: PlantModel, y0: float, r: float, dt: float, horizon_s: f
         change = simulated(0.0) - y_full  # the holding power from the start, less full power
 
         def response(ts: float) -> np.ndarray:
-            k = min(y_full.size, max(0, math.ceil(ts / dt - 1e-9)))  # the first step run at the holding power
-            y = y_full.copy()
-            y[k:] += change[: y.size - k]
-            return y
+            return _plus_from(y_full.copy(), _first_step(ts, dt, y_full.size), change)
 
     def trial(ts: float) -> float:
         return _settling(t_grid, response(ts), y0, r)
 
-    # the full-power response crossing r bounds the switch time from above
-    reach = np.flatnonzero((y_full - r) * math.copysign(1.0, r - y0) >= 0.0)
-    t_max = float(t_grid[reach[0]]) if reach.size else horizon_s
+    t_max = _reach_s(t_grid, y_full, y0, r, horizon_s)
     coarse = np.arange(0.0, t_max + dt, max(dt, t_max / 60.0))
     scores = [trial(ts) for ts in coarse]
     best = float(coarse[int(np.argmin(scores))])
@@ -268,9 +293,7 @@ def bang_hold_bound(pm: PlantModel, y0: float, r: float, dt: float, horizon_s: f
     fine = np.arange(max(0.0, best - step), best + step + dt / 2, dt)
     settle, ts = min((trial(ts), ts) for ts in fine)
     y = response(ts)
-    direction = math.copysign(1.0, r - y0)
-    over = max(0.0, float(np.max((y - r) * direction))) / abs(r - y0) * 100.0
-    return BangHold(ts, settle, over, u_full, ur, t_grid, y)
+    return BangHold(ts, settle, _overshoot_pct(y, y0, r), u_full, ur, t_grid, y)
 
 
 @dataclass
@@ -286,6 +309,11 @@ class BangBrakeHold:
     u_hold: float
     t: np.ndarray
     y: np.ndarray
+
+    def inputs(self) -> np.ndarray:
+        """The input at each of `t`."""
+        braked = np.where(self.t < self.pulse_s + self.brake_s, self.u_brake, self.u_hold)
+        return np.where(self.t < self.pulse_s, self.u_full, braked)
 
 
 BRAKE_GRID = 100  # candidates per axis (pulse, brake) of the coarse grid; then every dt around the best
@@ -304,14 +332,10 @@ def bang_brake_hold_bound(
 
     Linear plants only (None otherwise): each candidate is a superposition of three simulated responses, as
     in `bang_hold_bound`; simulating every candidate of the grid would take minutes per plant."""
-    plant = pm.build()
-    if not _is_linear(plant):
+    if not _is_linear(pm.build()):
         return None
-    u0 = rest_input(pm, y0)
-    ur = rest_input(pm, r, u_others=u0)
+    plant, u0, ur, start = _from_rest(pm, y0, r, dt)
     towards, away = (plant.u_max_pct, plant.u_min_pct) if r > y0 else (plant.u_min_pct, plant.u_max_pct)
-    start = _Sim(pm, dt, start_c=y0)
-    _settle(start, u0)
 
     def simulated(a: float, b: float) -> np.ndarray:
         def u(t: float) -> float:
@@ -326,12 +350,8 @@ def bang_brake_hold_bound(
     away_to_hold = simulated(0.0, 0.0) - y_full - to_away
 
     def response(a: float, b: float) -> np.ndarray:
-        ka = min(n, max(0, math.ceil(a / dt - 1e-9)))
-        kb = min(n, max(0, math.ceil((a + b) / dt - 1e-9)))
-        y = y_full.copy()
-        y[ka:] += to_away[: n - ka]
-        y[kb:] += away_to_hold[: n - kb]
-        return y
+        y = _plus_from(y_full.copy(), _first_step(a, dt, n), to_away)
+        return _plus_from(y, _first_step(a + b, dt, n), away_to_hold)
 
     def best_of(pulses: np.ndarray, brakes: np.ndarray, best: tuple[float, float, float]):
         for a in pulses:
@@ -339,19 +359,19 @@ def bang_brake_hold_bound(
                 best = min(best, (_settling(t_grid, response(a, b), y0, r), a, b))
         return best
 
+    def on_dt(lo: float, hi: float, step: float) -> np.ndarray:
+        return dt * np.round(np.arange(max(0.0, lo), hi + step / 2, step) / dt)
+
     # full power alone reaching r bounds both times: a longer pulse or brake only moves further away
-    reach = np.flatnonzero((y_full - r) * math.copysign(1.0, r - y0) >= 0.0)
-    span = float(t_grid[reach[0]]) if reach.size else horizon_s
+    span = _reach_s(t_grid, y_full, y0, r, horizon_s)
     step = max(dt, span / BRAKE_GRID)
-    coarse = dt * np.round(np.arange(0.0, span + step / 2, step) / dt)
+    coarse = on_dt(0.0, span, step)
     best = best_of(coarse, coarse, (math.inf, 0.0, 0.0))
-    reach_fine = BRAKE_REFINE_CELLS * step
-    fine_a = dt * np.round(np.arange(max(0.0, best[1] - reach_fine), best[1] + reach_fine + dt / 2, dt) / dt)
-    fine_b = dt * np.round(np.arange(max(0.0, best[2] - reach_fine), best[2] + reach_fine + dt / 2, dt) / dt)
-    settle, a, b = best_of(fine_a, fine_b, best)
+    around = BRAKE_REFINE_CELLS * step
+    settle, a, b = best_of(on_dt(best[1] - around, best[1] + around, dt),
+                           on_dt(best[2] - around, best[2] + around, dt), best)
     y = response(a, b)
-    over = max(0.0, float(np.max((y - r) * math.copysign(1.0, r - y0)))) / abs(r - y0) * 100.0
-    return BangBrakeHold(float(a), float(b), settle, over, towards, away, ur, t_grid, y)
+    return BangBrakeHold(float(a), float(b), settle, _overshoot_pct(y, y0, r), towards, away, ur, t_grid, y)
 
 
 def full_power_reach(pm: PlantModel, y0: float, r: float, dt: float, horizon_s: float,

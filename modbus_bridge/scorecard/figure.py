@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from ..metrics import BAND_2PCT
+from ..plots import pyplot
 from .build import Card, Row, window
 
 ZOOM_BANDS = 6.0  # the near-the-target panel spans this many bands either side of the setpoint
@@ -49,11 +50,7 @@ def gain_ratios(r: Row, phase: str | None) -> GainRatios | None:
 
 
 def write_png(card: Card, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     adapting = [(r, g) for r in card.rows if (g := gain_ratios(r, card.scored_phase)) is not None]
     heights = (2.0, 1.3, 1.0, 1.0) if adapting else (2.0, 1.3, 1.0)
     fig, axes = plt.subplots(len(heights), 1, figsize=(9, 2.2 * sum(heights)), sharex=True,
@@ -68,23 +65,16 @@ def write_png(card: Card, path: Path) -> None:
             continue
         t, true_c, w, u = _traces(r, card.scored_phase)
         (line,) = ax.plot(t, true_c, lw=1.1, label=r.name)
-        colours[r.name] = line.get_color()
-        axz.plot(t, true_c - w, lw=1.0, color=line.get_color())
-        axu.plot(t, u, lw=0.9, color=line.get_color())
+        colours[r.name] = c = line.get_color()
+        axz.plot(t, true_c - w, lw=1.0, color=c)
+        axu.plot(t, u, lw=0.9, color=c)
         end = max(end, float(t[-1]) if t.size else 0.0)
-    if card.bound is not None:
-        b = card.bound
-        ax.plot(b.t, b.y, "k--", lw=1.2, label="bound (bang-hold)")
-        axz.plot(b.t, np.asarray(b.y) - card.step[1], "k--", lw=1.0)
-        u_b = [b.u_full if x < b.switch_s else b.u_hold for x in b.t]
-        axu.plot(b.t, u_b, "k--", lw=1.0)
-    if card.braked is not None:
-        k = card.braked
-        ax.plot(k.t, k.y, "k:", lw=1.2, label="bound with a brake")
-        axz.plot(k.t, np.asarray(k.y) - card.step[1], "k:", lw=1.0)
-        braking = k.pulse_s + k.brake_s
-        u_k = [k.u_full if x < k.pulse_s else k.u_brake if x < braking else k.u_hold for x in k.t]
-        axu.plot(k.t, u_k, "k:", lw=1.0)
+    bounds = ((card.bound, "--", "bound (bang-hold)"), (card.braked, ":", "bound with a brake"))
+    for bound, style, label in bounds:
+        if bound is not None:
+            ax.plot(bound.t, bound.y, "k" + style, lw=1.2, label=label)
+            axz.plot(bound.t, bound.y - card.step[1], "k" + style, lw=1.0)
+            axu.plot(bound.t, bound.inputs(), "k" + style, lw=1.0)
     if band is not None:
         r0 = card.step[1]
         ax.axhspan(r0 - band, r0 + band, color="0.85", zorder=0, label="±2 % band")

@@ -11,7 +11,9 @@ from plc.st.errors import PlcRuntimeError
 
 
 @dataclass
-class LocatedVar:
+class Location:
+    """A located variable as declared, its location parsed."""
+
     name: str
     instance: str  # program instance ("" for a CONFIGURATION global)
     location: str  # e.g. "%MD3"
@@ -20,6 +22,12 @@ class LocatedVar:
     index: int
     bit: int | None
     iec_type: str
+
+
+@dataclass
+class LocatedVar(Location):
+    """A located variable of a loaded application, with its accessors."""
+
     get: Callable[[], Any]
     set: Callable[[Any], None]
 

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from types import CodeType
 
 from plc.st import rt, stdfbs
-from plc.st.app import Application, LocatedVar
+from plc.st.app import Application, LocatedVar, Location
 from plc.st.codegen import Instances, generate
 from plc.st.diagnostics import Diagnostic, StError
 from plc.st.index import Index
@@ -122,18 +122,12 @@ LOCATION = re.compile(r"%([IQM])([XBWDL])?(\d+)(?:\.(\d+))?")
 
 @dataclass(frozen=True)
 class _LocatedDecl:
-    """A located variable as declared, its location parsed: in a program instance (`instance`) or the
-    CONFIGURATION ("")."""
+    """A located variable of a compilation: where it is declared (its attribute, v_<name> lower-case, on a
+    program instance or the CONFIGURATION's globals) and what it is."""
 
-    instance: str
-    name: str  # lower-case, the attribute is v_<name>
-    decl_name: str
-    location: str  # e.g. "%MD3"
-    area: str  # I Q M
-    size: str  # X B W D L
-    index: int
-    bit: int | None
+    attr: str
     type: Type
+    location: Location
 
 
 @dataclass(frozen=True)
@@ -155,9 +149,10 @@ def _located_decls(comp: Compiler, instances: Instances) -> tuple[_LocatedDecl, 
             m = LOCATION.fullmatch(v.location) if v.location else None
             if m is None:
                 continue
-            area, size, index, bit = m.group(1), m.group(2) or "X", int(m.group(3)), m.group(4)
-            decls.append(_LocatedDecl(inst, name, v.decl_name or name, v.location, area, size, index,
-                                      int(bit) if bit is not None else None, v.type))
+            bit = int(m.group(4)) if m.group(4) is not None else None
+            where = Location(v.decl_name or name, inst, v.location, m.group(1), m.group(2) or "X",
+                             int(m.group(3)), bit, v.type.name)
+            decls.append(_LocatedDecl(f"v_{name}", v.type, where))
     return tuple(decls)
 
 
@@ -183,7 +178,7 @@ def load_application(sources: list[tuple[str, str]]) -> Application:
     except rt.PlcRuntimeError as exc:
         raise StError([Diagnostic(sources[0][0], 1, 1, f"initialisation fault: {exc}")]) from None
     intervals = {inst: iv for inst, _, iv in comp.instances}
-    located = [_located_var(d, programs[d.instance] if d.instance else G) for d in comp.located]
+    located = [_located_var(d, programs.get(d.location.instance, G)) for d in comp.located]
     return Application(clk, programs, intervals, located, G, comp.code)
 
 
@@ -201,16 +196,8 @@ def _setter(obj, attr: str, t: Type):
 
 
 def _located_var(d: _LocatedDecl, obj) -> LocatedVar:
-    attr = f"v_{d.name}"
     return LocatedVar(
-        name=d.decl_name,
-        instance=d.instance,
-        location=d.location,
-        area=d.area,
-        size=d.size,
-        index=d.index,
-        bit=d.bit,
-        iec_type=d.type.name,
-        get=(lambda o=obj, a=attr: getattr(o, a)),
-        set=_setter(obj, attr, d.type),
+        **vars(d.location),
+        get=(lambda o=obj, a=d.attr: getattr(o, a)),
+        set=_setter(obj, d.attr, d.type),
     )
